@@ -1,0 +1,46 @@
+//! Typed errors. Every variant carries enough context to point the user at the cause.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in mesorve, from reading a scene to solving an RVE.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene key has a bad value; `key` is the dotted path, e.g. `materials.itz.delta_c`.
+    #[error("scene key `{key}`: {reason}")]
+    Scene { key: String, reason: String },
+    /// The TOML text could not be parsed or does not match the schema.
+    #[error("scene parse error: {0}")]
+    SceneParse(String),
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// Random placement could not meet the request within its bounded attempts.
+    #[error("geometry: {0}")]
+    Placement(String),
+    /// A Gmsh file is malformed or unsupported.
+    #[error("gmsh file {path}, line {line}: {reason}")]
+    Gmsh {
+        path: PathBuf,
+        line: usize,
+        reason: String,
+    },
+    /// Meshing failed or produced an unusable mesh.
+    #[error("mesh: {0}")]
+    Mesh(String),
+}
+
+impl Error {
+    /// Shorthand for a scene error on `key`.
+    pub fn scene(key: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Scene {
+            key: key.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,25 @@
+//! mesorve: a mesoscale Representative Volume Element (RVE) of concrete -- matrix,
+//! aggregates and cohesive-contact interfaces (ITZ) -- behind a UMAT-style material-point
+//! interface. The physics follows Pituba & Souza Neto (2015), "Modeling of unilateral
+//! effect in brittle materials by a mesoscopic scale approach"; equation numbers in the
+//! doc comments refer to that paper.
+//!
+//! Dependencies flow one way:
+//! `ffi -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
+//! with `scene` describing everything and `geometry` producing microstructures.
+
+pub mod element;
+pub mod error;
+pub mod ffi;
+pub mod geometry;
+pub mod interface;
+pub mod io;
+pub mod material;
+pub mod mesh;
+pub mod scene;
+
+pub use error::{Error, Result};
+
+/// The crate version, `major.minor.patch`, as in Cargo.toml.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+pub fn cli_main() -> i32 { 0 }

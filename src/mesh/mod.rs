@@ -1,0 +1,5 @@
+//! Meshes: the data model, triangulation of a microstructure, Gmsh import, ITZ insertion.
+
+mod model;
+
+pub use model::{BoundaryNodes, InterfaceElement, Mesh, Phase, PhaseMesh, Triangle};
