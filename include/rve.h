@@ -15,6 +15,12 @@
 #include <stdint.h>
 #include <stdlib.h>
 
+// Densest random packing we attempt; above it random sequential placement jams.
+#define MAX_AREA_FRACTION 0.7
+
+// Upper bound on the estimated triangle count, to refuse runaway mesh sizes.
+#define MAX_TRIANGLES 2.0e6
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus

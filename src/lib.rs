@@ -8,6 +8,7 @@
 //! `ffi -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
 //! with `scene` describing everything and `geometry` producing microstructures.
 
+pub mod cli;
 pub mod element;
 pub mod error;
 pub mod ffi;
@@ -22,4 +23,3 @@ pub use error::{Error, Result};
 
 /// The crate version, `major.minor.patch`, as in Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
-pub fn cli_main() -> i32 { 0 }

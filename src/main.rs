@@ -1,4 +1,4 @@
 //! The `rve` command-line tool.
 fn main() {
-    std::process::exit(rve::cli_main());
+    std::process::exit(rve::cli::main());
 }

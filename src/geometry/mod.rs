@@ -1,1 +1,8 @@
-//! (filled in by its own work item)
+//! Microstructures: inclusion shapes and their placement in the cell.
+
+mod placement;
+pub mod polygon;
+mod shape;
+
+pub use placement::{build_inclusions, place_random, Placement};
+pub use shape::Inclusion;

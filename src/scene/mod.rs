@@ -1,1 +1,13 @@
-//! (filled in by its own work item)
+//! Scenes: the TOML description of an RVE (cell, geometry, mesh, materials, effects,
+//! boundary condition, solver settings, strain path), its loading and its validation.
+
+mod load;
+mod schema;
+mod validate;
+
+pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
+pub use schema::{
+    BoundaryKind, BoundarySpec, CellSpec, EffectsSpec, ElasticSpec, Explicit, ExplicitInclusion,
+    GeometrySpec, GmshSpec, InterfaceQuadratureSpec, ItzSpec, MaterialsSpec, MeshSpec, Orientation,
+    PathSegment, PenaltySpec, RandomSpec, ShapeKind, SolverSpec,
+};

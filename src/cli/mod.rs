@@ -1,0 +1,50 @@
+//! The `rve` command-line tool: argument parsing and the subcommands.
+
+mod mesh_cmd;
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+use crate::error::Result;
+use crate::scene::{Scene, DEFAULT_SCENE_NAME};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "rve",
+    version,
+    about = "Mesoscale RVE of concrete: meshes, solves, homogenizes"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Build the RVE mesh of a scene and print its statistics.
+    Mesh(mesh_cmd::MeshArgs),
+}
+
+/// Loads `path`, or the embedded paper scene when no path is given.
+fn load_scene(path: Option<&PathBuf>) -> Result<(Scene, String)> {
+    match path {
+        Some(p) => Ok((Scene::from_file(p)?, p.display().to_string())),
+        None => Ok((Scene::embedded_default()?, DEFAULT_SCENE_NAME.to_string())),
+    }
+}
+
+/// Entry point of the `rve` binary; returns the process exit code.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Mesh(args) => mesh_cmd::run(&args),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("rve: error: {e}");
+            1
+        }
+    }
+}

@@ -1,0 +1,97 @@
+//! From a scene to a mesh: geometry, triangulation (or Gmsh import), ITZ insertion.
+
+use std::path::Path;
+
+use super::gmsh::read_msh;
+use super::itz::{insert_itz, without_itz};
+use super::model::{Mesh, PhaseMesh};
+use super::triangulate::triangulate;
+use crate::error::{Error, Result};
+use crate::geometry::{build_inclusions, place_random, Inclusion};
+use crate::scene::{GeometrySpec, Scene};
+
+/// The mesh of a scene and the geometry it came from.
+#[derive(Clone, Debug)]
+pub struct Microstructure {
+    pub mesh: Mesh,
+    /// Exact inclusion shapes (empty for Gmsh meshes and homogeneous cells).
+    pub inclusions: Vec<Inclusion>,
+    /// Exact inclusion area over cell area, before discretisation (None for Gmsh).
+    pub geometric_area_fraction: Option<f64>,
+    /// Random placement rounds used (None unless random).
+    pub placement_rounds: Option<u32>,
+}
+
+/// Builds the mesh that `scene` describes.
+pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
+    let spec = &scene.spec;
+    let [width, height] = spec.cell.size;
+    let mut placement_rounds = None;
+    let inclusions = match &spec.geometry {
+        GeometrySpec::Homogeneous => Vec::new(),
+        GeometrySpec::Random(r) => {
+            let placed = place_random(r, width, height)?;
+            placement_rounds = Some(placed.rounds);
+            placed.inclusions
+        }
+        GeometrySpec::Explicit(e) => build_inclusions(e, width, height)?,
+        GeometrySpec::Gmsh(g) => {
+            let path = scene.base_dir.join(&g.file);
+            let phase_mesh = read_msh(&path, &g.matrix, &g.inclusions)?;
+            let phase_mesh = fit_to_cell(phase_mesh, width, height, &path)?;
+            let mesh = finish(phase_mesh, width, height, spec.effects.cohesive)?;
+            return Ok(Microstructure {
+                mesh,
+                inclusions: Vec::new(),
+                geometric_area_fraction: None,
+                placement_rounds: None,
+            });
+        }
+    };
+    let h_itz = spec.mesh.interface_size.unwrap_or(spec.mesh.size);
+    let polygons: Vec<Vec<[f64; 2]>> = inclusions.iter().map(|i| i.polygon(h_itz)).collect();
+    let phase_mesh = triangulate(
+        width,
+        height,
+        &polygons,
+        spec.mesh.size,
+        spec.mesh.min_angle,
+    )?;
+    let mesh = finish(phase_mesh, width, height, spec.effects.cohesive)?;
+    let area: f64 = inclusions.iter().map(Inclusion::area).sum();
+    Ok(Microstructure {
+        mesh,
+        geometric_area_fraction: Some(area / (width * height)),
+        inclusions,
+        placement_rounds,
+    })
+}
+
+fn finish(phase_mesh: PhaseMesh, width: f64, height: f64, cohesive: bool) -> Result<Mesh> {
+    if cohesive {
+        insert_itz(phase_mesh, width, height)
+    } else {
+        without_itz(phase_mesh, width, height)
+    }
+}
+
+/// Moves a Gmsh mesh so its bounding box starts at the origin, and checks that the box is
+/// the scene's cell.
+fn fit_to_cell(mut pm: PhaseMesh, width: f64, height: f64, path: &Path) -> Result<PhaseMesh> {
+    let bb = crate::geometry::polygon::bounding_box(&pm.nodes);
+    let (w, h) = (bb[2] - bb[0], bb[3] - bb[1]);
+    let tol = 1e-6 * width.max(height);
+    if (w - width).abs() > tol || (h - height).abs() > tol {
+        return Err(Error::scene(
+            "cell.size",
+            format!(
+                "[{width}, {height}] does not match the bounding box [{w}, {h}] of {}",
+                path.display()
+            ),
+        ));
+    }
+    for p in pm.nodes.iter_mut() {
+        *p = [p[0] - bb[0], p[1] - bb[1]];
+    }
+    Ok(pm)
+}

@@ -1,0 +1,283 @@
+//! Validation: every check names the offending key and says why.
+
+use super::schema::*;
+use crate::error::{Error, Result};
+
+/// Densest random packing we attempt; above it random sequential placement jams.
+pub const MAX_AREA_FRACTION: f64 = 0.7;
+/// Upper bound on the estimated triangle count, to refuse runaway mesh sizes.
+pub const MAX_TRIANGLES: f64 = 2.0e6;
+
+fn positive(key: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::scene(
+            key,
+            format!("must be a positive finite number, got {v}"),
+        ))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::scene(
+            key,
+            format!("must be a finite number >= 0, got {v}"),
+        ))
+    }
+}
+
+fn check_elastic(key: &str, m: &ElasticSpec) -> Result<()> {
+    positive(&format!("{key}.young"), m.young)?;
+    if !(m.poisson.is_finite() && m.poisson > -1.0 && m.poisson < 0.5) {
+        return Err(Error::scene(
+            format!("{key}.poisson"),
+            format!("must lie in (-1, 0.5), got {}", m.poisson),
+        ));
+    }
+    Ok(())
+}
+
+impl SceneSpec {
+    /// Checks magnitudes and consistency of the whole scene.
+    pub fn validate(&self) -> Result<()> {
+        let [w, h] = self.cell.size;
+        positive("cell.size[0]", w)?;
+        positive("cell.size[1]", h)?;
+        let min_side = w.min(h);
+
+        let has_inclusions = match &self.geometry {
+            GeometrySpec::Homogeneous => false,
+            GeometrySpec::Random(r) => {
+                validate_random(r, min_side)?;
+                true
+            }
+            GeometrySpec::Explicit(e) => {
+                validate_explicit(e, w, h)?;
+                !e.inclusions.is_empty()
+            }
+            GeometrySpec::Gmsh(g) => {
+                if g.file.trim().is_empty() {
+                    return Err(Error::scene("geometry.file", "must name an .msh file"));
+                }
+                if g.matrix.trim().is_empty() {
+                    return Err(Error::scene(
+                        "geometry.matrix",
+                        "must name a physical group",
+                    ));
+                }
+                if g.inclusions.iter().any(|n| n == &g.matrix) {
+                    return Err(Error::scene(
+                        "geometry.inclusions",
+                        format!("group `{}` is also the matrix group", g.matrix),
+                    ));
+                }
+                true
+            }
+        };
+
+        let m = &self.mesh;
+        positive("mesh.size", m.size)?;
+        if m.size > min_side {
+            return Err(Error::scene(
+                "mesh.size",
+                format!("{} is larger than the cell side {min_side}", m.size),
+            ));
+        }
+        let h_itz = m.interface_size.unwrap_or(m.size);
+        positive("mesh.interface_size", h_itz)?;
+        let estimate = 2.0 * w * h / (0.5 * 3f64.sqrt() * m.size.min(h_itz).powi(2));
+        if estimate > MAX_TRIANGLES {
+            return Err(Error::scene(
+                "mesh.size",
+                format!(
+                    "would give about {estimate:.0} triangles, more than the limit {MAX_TRIANGLES:.0}"
+                ),
+            ));
+        }
+        if !(20.0..=30.0).contains(&m.min_angle) {
+            return Err(Error::scene(
+                "mesh.min_angle",
+                format!("must lie in [20, 30] degrees, got {}", m.min_angle),
+            ));
+        }
+
+        check_elastic("materials.matrix", &self.materials.matrix)?;
+        match (&self.materials.aggregate, has_inclusions) {
+            (Some(a), _) => check_elastic("materials.aggregate", a)?,
+            (None, true) => {
+                return Err(Error::scene(
+                    "materials.aggregate",
+                    "missing: the geometry has inclusions",
+                ))
+            }
+            (None, false) => {}
+        }
+        if self.effects.contact && !self.effects.cohesive {
+            return Err(Error::scene(
+                "effects.contact",
+                "contact acts on ITZ elements, which need effects.cohesive = true",
+            ));
+        }
+        if self.effects.cohesive && has_inclusions {
+            let Some(itz) = &self.materials.itz else {
+                return Err(Error::scene(
+                    "materials.itz",
+                    "missing: effects.cohesive is on and the geometry has inclusions",
+                ));
+            };
+            validate_itz(itz)?;
+        } else if let Some(itz) = &self.materials.itz {
+            validate_itz(itz)?;
+        }
+
+        let s = &self.solver;
+        positive("solver.tolerance", s.tolerance)?;
+        if s.tolerance >= 1.0 {
+            return Err(Error::scene(
+                "solver.tolerance",
+                "must be below 1 (relative residual)",
+            ));
+        }
+        if s.max_iterations == 0 || s.max_iterations > 1000 {
+            return Err(Error::scene(
+                "solver.max_iterations",
+                "must lie in 1..=1000",
+            ));
+        }
+        if s.max_substep_depth > 20 {
+            return Err(Error::scene(
+                "solver.max_substep_depth",
+                "must be at most 20",
+            ));
+        }
+
+        for (k, seg) in self.path.iter().enumerate() {
+            if seg.increments == 0 || seg.increments > 1_000_000 {
+                return Err(Error::scene(
+                    format!("path[{k}].increments"),
+                    "must lie in 1..=1000000",
+                ));
+            }
+            if seg.to.iter().any(|v| !v.is_finite() || v.abs() > 1.0) {
+                return Err(Error::scene(
+                    format!("path[{k}].to"),
+                    "strain components must be finite and at most 1 in magnitude",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn validate_itz(itz: &ItzSpec) -> Result<()> {
+    positive("materials.itz.sigma_c", itz.sigma_c)?;
+    positive("materials.itz.delta_c", itz.delta_c)?;
+    positive("materials.itz.beta", itz.beta)?;
+    match (itz.penalty.lambda_p, itz.penalty.stiffness) {
+        (Some(l), None) => positive("materials.itz.penalty.lambda_p", l),
+        (None, Some(k)) => positive("materials.itz.penalty.stiffness", k),
+        _ => Err(Error::scene(
+            "materials.itz.penalty",
+            "give exactly one of `lambda_p` (paper, per length) or `stiffness` (per area)",
+        )),
+    }
+}
+
+fn validate_random(r: &RandomSpec, min_side: f64) -> Result<()> {
+    let [dmin, dmax] = r.diameter;
+    positive("geometry.diameter[0]", dmin)?;
+    positive("geometry.diameter[1]", dmax)?;
+    if dmin > dmax {
+        return Err(Error::scene(
+            "geometry.diameter",
+            format!("[min, max] with min {dmin} > max {dmax}"),
+        ));
+    }
+    non_negative("geometry.gap", r.gap)?;
+    non_negative("geometry.margin", r.margin)?;
+    if dmax + 2.0 * r.margin > min_side {
+        return Err(Error::scene(
+            "geometry.diameter",
+            format!(
+                "largest diameter {dmax} plus twice the margin {} does not fit in the cell side {min_side}",
+                r.margin
+            ),
+        ));
+    }
+    if !(r.area_fraction.is_finite()
+        && r.area_fraction > 0.0
+        && r.area_fraction <= MAX_AREA_FRACTION)
+    {
+        return Err(Error::scene(
+            "geometry.area_fraction",
+            format!(
+                "must lie in (0, {MAX_AREA_FRACTION}]; got {} (random placement jams above ~0.7)",
+                r.area_fraction
+            ),
+        ));
+    }
+    if !(r.aspect_ratio.is_finite() && (1.0..=10.0).contains(&r.aspect_ratio)) {
+        return Err(Error::scene(
+            "geometry.aspect_ratio",
+            format!(
+                "must lie in [1, 10] (major over minor), got {}",
+                r.aspect_ratio
+            ),
+        ));
+    }
+    if r.shape == ShapeKind::Circle && r.aspect_ratio != 1.0 {
+        return Err(Error::scene(
+            "geometry.aspect_ratio",
+            "only meaningful for shape = \"ellipse\"",
+        ));
+    }
+    if let Orientation::Fixed(a) = r.orientation {
+        if !a.is_finite() {
+            return Err(Error::scene(
+                "geometry.orientation",
+                "must be finite or \"random\"",
+            ));
+        }
+    }
+    if r.max_attempts == 0 || r.max_rounds == 0 {
+        return Err(Error::scene(
+            "geometry.max_attempts",
+            "attempts and rounds must be >= 1",
+        ));
+    }
+    Ok(())
+}
+
+fn validate_explicit(e: &Explicit, w: f64, h: f64) -> Result<()> {
+    for (k, inc) in e.inclusions.iter().enumerate() {
+        let key = format!("geometry.inclusions[{k}]");
+        let [cx, cy] = inc.center;
+        if !(cx.is_finite() && cy.is_finite() && cx > 0.0 && cx < w && cy > 0.0 && cy < h) {
+            return Err(Error::scene(
+                format!("{key}.center"),
+                "must lie inside the cell",
+            ));
+        }
+        match (inc.radius, inc.semi_axes) {
+            (Some(r), None) => positive(&format!("{key}.radius"), r)?,
+            (None, Some([a, b])) => {
+                positive(&format!("{key}.semi_axes[0]"), a)?;
+                positive(&format!("{key}.semi_axes[1]"), b)?;
+            }
+            _ => {
+                return Err(Error::scene(
+                    key,
+                    "give exactly one of `radius` (circle) or `semi_axes` (ellipse)",
+                ))
+            }
+        }
+        if !inc.angle.is_finite() {
+            return Err(Error::scene(format!("{key}.angle"), "must be finite"));
+        }
+    }
+    Ok(())
+}
