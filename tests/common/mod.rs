@@ -1,0 +1,26 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use rve::scene::Scene;
+
+/// Path of a file in the repository.
+pub fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Loads a shipped scene.
+pub fn scene(rel: &str) -> Scene {
+    Scene::from_file(repo(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// The paper scene with text replacements applied (for variations and bad inputs).
+pub fn paper_scene_with(replacements: &[(&str, &str)]) -> String {
+    let mut text = std::fs::read_to_string(repo("scenes/paper_rve.toml")).unwrap();
+    for (from, to) in replacements {
+        assert!(text.contains(from), "scene text has no `{from}`");
+        text = text.replacen(from, to, 1);
+    }
+    text
+}
