@@ -1,1 +1,5 @@
-//! (filled in by its own work item)
+//! Bulk constitutive laws of the matrix and aggregate triangles.
+
+mod elastic;
+
+pub use elastic::{Analysis, IsotropicElastic};
