@@ -57,6 +57,9 @@ use crate::interface::{Branch, CohesiveHistory, CohesiveLaw};
 use crate::mesh::InterfaceElement;
 
 /// The largest number of quadrature points of any [`InterfaceQuadrature`].
+///
+/// (Not part of the C API: kept out of the cbindgen header.)
+/// cbindgen:ignore
 pub const MAX_POINTS: usize = 3;
 
 /// Quadrature rule along the interface element.
