@@ -48,6 +48,10 @@
 //! [`InterfaceQuadrature::Lobatto2`] puts the points at the nodes (2-point Newton-Cotes,
 //! i.e. nodal lumping), the usual cure for the spurious traction oscillations of Gauss
 //! integrated interface elements with a stiff (penalty or initial cohesive) response.
+//! The branch (loading, unloading, contact) is decided per quadrature point on the
+//! interpolated jump there (the paper's "gap between the Gauss points"), so one element
+//! may be partly closed and partly open, and its faces need not stay parallel.
+//! The `PerLength` penalty uses the element's reference length `l_e`.
 //! Points are numbered in increasing `xi` (from the `a0`/`b0` end to the `a1`/`b1` end);
 //! history slices use that numbering.
 

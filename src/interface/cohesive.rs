@@ -89,10 +89,10 @@ use nalgebra::{Matrix2, Vector2};
 /// Contact penalty on a closed interface point (eqs. 36-37).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Penalty {
-    /// The paper's form: `t = lambda_p * l_e * delta`, `lambda_p` in force/length^2 per
-    /// length, i.e. N/mm in the paper's units (Table 1: 1e7, Table 2: 1e5), multiplied by
-    /// the element length `l_e`. Mesh dependent: the stiffness per unit area scales
-    /// with `l_e`.
+    /// The paper's form: `t = lambda_p * l_e * delta`. The paper gives `lambda_p` in N/mm
+    /// (Table 1: 1e7, Table 2: 1e5) and uses `lambda_p l_e` as the traction/jump ratio,
+    /// whose units should be N/mm^3: dimensionally odd, kept as published. Mesh
+    /// dependent: the contact stiffness per unit area scales with the element length.
     PerLength { lambda_p: f64 },
     /// Mesh-independent stiffness per unit area, `t = stiffness * delta`
     /// (N/mm^3 in the paper's units).
