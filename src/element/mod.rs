@@ -1,1 +1,7 @@
-//! (filled in by its own work item)
+//! Element kernels: the constant-strain bulk triangle and the 4-node zero-thickness
+//! cohesive-contact interface element. Pure, fixed-size, allocation free.
+
+pub mod interface4;
+pub mod triangle;
+
+pub use interface4::{InterfaceGeometry, InterfaceQuadrature, InterfaceResponse, MAX_POINTS};

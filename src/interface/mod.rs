@@ -1,1 +1,5 @@
-//! (filled in by its own work item)
+//! Constitutive laws of the zero-thickness interfaces (ITZ): the cohesive-contact law.
+
+mod cohesive;
+
+pub use cohesive::{Branch, CohesiveHistory, CohesiveLaw, CohesivePoint, Penalty};

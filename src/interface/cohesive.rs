@@ -1,0 +1,568 @@
+//! The cohesive-contact law of the ITZ (paper section 3.2, eqs. 19-25, and the traction
+//! and tangent formulas of section 4, eqs. 32-37 and 45-47).
+//!
+//! Everything here is local to one quadrature point and expressed in the local axes of the
+//! interface element: `s` (sliding, along the edge) and `n` (normal, out of the inclusion).
+//! The displacement jump is `[delta_s, delta_n]` (matrix side minus inclusion side, see
+//! [`crate::mesh`]); `delta_n > 0` is opening.
+//!
+//! # The law
+//!
+//! Effective opening (eq. 20):
+//! ```text
+//! delta = sqrt(beta^2 delta_s^2 + delta_n^2)
+//! ```
+//! Effective traction: loading envelope (eq. 23) and linear unloading/reloading to the
+//! origin (eq. 24):
+//! ```text
+//! t = e sigma_c (delta/delta_c) exp(-delta/delta_c)     if delta >= delta_max   (loading)
+//! t = (t_max/delta_max) delta                           if delta <  delta_max   (unloading)
+//! ```
+//! Traction vector (eq. 21, components eqs. 32-35), with the secant `k = t/delta`:
+//! ```text
+//! t_s = k beta^2 delta_s,    t_n = k delta_n
+//! k   = (sigma_c/delta_c) exp(1 - delta/delta_c)         loading   (eqs. 32-33)
+//! k   = t_max/delta_max                                  unloading (eqs. 34-35)
+//! ```
+//! Writing the loading secant as `(sigma_c/delta_c) exp(1 - delta/delta_c)` instead of
+//! `t(delta)/delta` removes the `0/0` at `delta = 0`: `k(0) = e sigma_c/delta_c` is the
+//! initial stiffness, and the law is exact for any tiny opening (1e-300 included; `delta`
+//! is computed with `hypot`, which neither underflows nor overflows).
+//!
+//! Consistent tangent `C = dt/d(delta_s, delta_n)`, loading (eq. 45):
+//! ```text
+//!         | beta^2 (1 - beta^2 ds^2 /(delta_c delta))    -beta^2 ds dn /(delta_c delta) |
+//! C = k   |                                                                             |
+//!         | -beta^2 ds dn /(delta_c delta)               1 - dn^2 /(delta_c delta)      |
+//! ```
+//! computed as `beta^2 ds^2/delta = (beta ds) u_s`, `beta^2 ds dn/delta = beta (beta ds) u_n`,
+//! `dn^2/delta = dn u_n` with the unit direction `(u_s, u_n) = (beta ds, dn)/delta`, which is
+//! bounded; at `delta = 0` the correction terms vanish and `C = (e sigma_c/delta_c)
+//! diag(beta^2, 1)`, the exact derivative there (the correction is `O(delta)`).
+//! Unloading (eq. 46): `C = (t_max/delta_max) diag(beta^2, 1)`.
+//!
+//! Contact, when enabled and `delta_n < 0` (eqs. 36-37, tangent eq. 47): a penalty on both
+//! components, `t = k_p [delta_s, delta_n]`, `C = k_p I`, with `k_p` from [`Penalty`].
+//!
+//! The loading secant and tangent derive from the potential `phi(delta)` with
+//! `dphi/d delta = t(delta)`, so `C` is symmetric in every branch.
+//!
+//! # Choices the paper leaves open (made here, fixed)
+//!
+//! * **Loading test.** Eq. 23 asks `delta = delta_max and d(delta)/dt >= 0`. In an implicit
+//!   step this is decided on the trial total opening against the *committed* history:
+//!   loading iff `delta >= delta_max` (equality is loading, so a virgin point at
+//!   `delta = 0` is on the loading branch and its tangent is the initial stiffness). No rate
+//!   enters, so Newton iterates that wander below `delta_max` and back do not matter.
+//! * **History update** (eq. 25): only on the loading branch, trial
+//!   `delta_max' = delta`, `t_max' = t(delta)` (the envelope value, which decreases after the
+//!   peak). Unloading and contact return the committed history unchanged. The caller
+//!   commits the trial history when the increment converges.
+//! * **Pre-peak unloading.** The envelope is concave on `[0, 2 delta_c]`, so the secant
+//!   `t_max/delta_max` lies below it even before the peak: this intrinsic law (Ortiz-Pandolfi)
+//!   degrades the secant stiffness from the first opening on. That is the paper's law.
+//! * **Sliding** is the total tangential jump measured from the reference configuration
+//!   (no plastic slip, no friction). Its sign does not matter for `delta` (isotropy,
+//!   eq. 19); `t_s` has the sign of `delta_s`.
+//! * **`delta_n == 0` exactly counts as open** (cohesive branch); contact needs
+//!   `delta_n < 0` strictly (`-0.0` is open too).
+//! * **Contact replaces the cohesive traction** (the two are not added) and acts on both
+//!   components: a closed point sticks in shear with the penalty stiffness, as eq. 36 says;
+//!   there is no friction law or slip. The history is frozen while in contact, so a closed
+//!   point can neither damage nor heal.
+//! * **Contact switched off** (`contact = false`): the cohesive law acts symmetrically for
+//!   `delta_n < 0` (the effective opening uses `delta_n^2`, `t_n = k delta_n` is compressive)
+//!   and compression can drive `delta_max` up, i.e. damage the interface. Interpenetration is
+//!   then resisted only by the cohesive stiffness. This mode is for studies without the
+//!   unilateral effect.
+//! * **Penalty.** The paper's `t = lambda_p l_e delta` (eqs. 36-37) multiplies a per-length
+//!   factor by the element length, so the contact stiffness per unit area grows with the
+//!   element size; [`Penalty::PerArea`] is the mesh-independent alternative `t = k delta`.
+//! * Non-finite jumps give non-finite tractions (the caller's residual check catches them);
+//!   nothing here panics.
+//!
+//! Preconditions (not checked here; the scene validates them): `sigma_c > 0`,
+//! `delta_c > 0`, `beta >= 0`, penalty `> 0`, `length > 0`.
+
+use nalgebra::{Matrix2, Vector2};
+
+/// Contact penalty on a closed interface point (eqs. 36-37).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Penalty {
+    /// The paper's form: `t = lambda_p * l_e * delta`. The paper gives `lambda_p` in N/mm
+    /// (Table 1: 1e7, Table 2: 1e5) and uses `lambda_p l_e` as the traction/jump ratio,
+    /// whose units should be N/mm^3: dimensionally odd, kept as published. Mesh
+    /// dependent: the contact stiffness per unit area scales with the element length.
+    PerLength { lambda_p: f64 },
+    /// Mesh-independent stiffness per unit area, `t = stiffness * delta`
+    /// (N/mm^3 in the paper's units).
+    PerArea { stiffness: f64 },
+}
+
+/// Parameters of the cohesive-contact law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CohesiveLaw {
+    /// Maximum cohesive normal traction `sigma_c` (peak of the envelope, at `delta_c`).
+    pub sigma_c: f64,
+    /// Characteristic opening `delta_c` (opening at the peak).
+    pub delta_c: f64,
+    /// Mode-mixity weight `beta`: ratio of shear to normal critical tractions (eq. 22).
+    pub beta: f64,
+    /// Contact penalty, used only when `contact` is on.
+    pub penalty: Penalty,
+    /// Unilateral contact on closure (`delta_n < 0`); off: the cohesive law is symmetric.
+    pub contact: bool,
+}
+
+/// The internal variables of one quadrature point, `q` of eq. 19. Virgin = zeros.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CohesiveHistory {
+    /// Largest effective opening reached on the loading branch.
+    pub delta_max: f64,
+    /// Effective traction at `delta_max`, `t(delta_max)` of eq. 23.
+    pub t_max: f64,
+}
+
+/// Which branch of the law a point is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Branch {
+    /// `delta >= delta_max`: on the envelope (eq. 23), history advances.
+    Loading,
+    /// `delta < delta_max`: secant to the origin (eq. 24), history unchanged.
+    Unloading,
+    /// Contact on and `delta_n < 0`: penalty (eqs. 36-37), history unchanged.
+    Contact,
+}
+
+/// The response of the law at one point for a trial jump.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CohesivePoint {
+    /// Local traction `[t_s, t_n]`.
+    pub traction: Vector2<f64>,
+    /// Consistent tangent `d[t_s, t_n] / d[delta_s, delta_n]` (eqs. 45-47); symmetric.
+    pub tangent: Matrix2<f64>,
+    /// Trial history: advanced on the loading branch, the committed one otherwise.
+    pub history: CohesiveHistory,
+    /// The branch taken.
+    pub branch: Branch,
+    /// Effective opening `delta` (eq. 20) of the trial jump, in every branch.
+    pub opening: f64,
+}
+
+impl Penalty {
+    /// Contact stiffness per unit area for an element of reference length `length`.
+    #[inline]
+    pub fn stiffness(&self, length: f64) -> f64 {
+        match *self {
+            Penalty::PerLength { lambda_p } => lambda_p * length,
+            Penalty::PerArea { stiffness } => stiffness,
+        }
+    }
+}
+
+impl CohesiveLaw {
+    /// Contact stiffness per unit area `k_p` (eqs. 36-37, 47): `lambda_p l_e` or the
+    /// per-area stiffness.
+    #[inline]
+    pub fn contact_stiffness(&self, length: f64) -> f64 {
+        self.penalty.stiffness(length)
+    }
+
+    /// Initial (virgin) stiffness `e sigma_c / delta_c`, the slope of eq. 23 at the origin.
+    #[inline]
+    pub fn initial_stiffness(&self) -> f64 {
+        std::f64::consts::E * self.sigma_c / self.delta_c
+    }
+
+    /// The loading envelope (eq. 23): `t(delta) = e sigma_c (delta/delta_c) exp(-delta/delta_c)`.
+    /// Its maximum is `sigma_c`, at `delta = delta_c`.
+    #[inline]
+    pub fn envelope(&self, delta: f64) -> f64 {
+        self.loading_secant(delta) * delta
+    }
+
+    /// `t(delta)/delta = (sigma_c/delta_c) exp(1 - delta/delta_c)`, finite at 0.
+    #[inline]
+    fn loading_secant(&self, delta: f64) -> f64 {
+        (self.sigma_c / self.delta_c) * (1.0 - delta / self.delta_c).exp()
+    }
+
+    /// Evaluates the law at a trial local jump `[delta_s, delta_n]` against the committed
+    /// `history`; `length` is the element's reference length (used only by
+    /// [`Penalty::PerLength`]). See the module documentation for the formulas and choices.
+    /// Pure, allocation free.
+    pub fn evaluate(
+        &self,
+        history: &CohesiveHistory,
+        jump: [f64; 2],
+        length: f64,
+    ) -> CohesivePoint {
+        let [ds, dn] = jump;
+        let beta = self.beta;
+        let bs = beta * ds;
+        let opening = bs.hypot(dn);
+
+        if self.contact && dn < 0.0 {
+            // Eqs. 36-37 and 47.
+            let kp = self.contact_stiffness(length);
+            return CohesivePoint {
+                traction: Vector2::new(kp * ds, kp * dn),
+                tangent: Matrix2::from_diagonal_element(kp),
+                history: *history,
+                branch: Branch::Contact,
+                opening,
+            };
+        }
+
+        if opening >= history.delta_max {
+            // Loading, eqs. 23, 32-33, tangent eq. 45.
+            let k = self.loading_secant(opening);
+            let (us, un) = if opening > 0.0 {
+                (bs / opening, dn / opening)
+            } else {
+                (0.0, 0.0)
+            };
+            let inv_dc = 1.0 / self.delta_c;
+            let css = k * beta * beta * (1.0 - bs * us * inv_dc);
+            let csn = -k * beta * bs * un * inv_dc;
+            let cnn = k * (1.0 - dn * un * inv_dc);
+            CohesivePoint {
+                traction: Vector2::new(k * beta * bs, k * dn),
+                tangent: Matrix2::new(css, csn, csn, cnn),
+                history: CohesiveHistory {
+                    delta_max: opening,
+                    t_max: k * opening,
+                },
+                branch: Branch::Loading,
+                opening,
+            }
+        } else {
+            // Unloading/reloading to the origin, eqs. 24, 34-35, tangent eq. 46.
+            // Here delta_max > opening >= 0, so the division is safe.
+            let k = history.t_max / history.delta_max;
+            CohesivePoint {
+                traction: Vector2::new(k * beta * bs, k * dn),
+                tangent: Matrix2::new(k * beta * beta, 0.0, 0.0, k),
+                history: *history,
+                branch: Branch::Unloading,
+                opening,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DC: f64 = 2e-4;
+    const LEN: f64 = 0.5;
+
+    fn law(contact: bool) -> CohesiveLaw {
+        CohesiveLaw {
+            sigma_c: 4.0,
+            delta_c: DC,
+            beta: 0.707,
+            penalty: Penalty::PerLength { lambda_p: 1e7 },
+            contact,
+        }
+    }
+
+    /// History committed after loading to effective opening `delta`.
+    fn loaded_to(l: &CohesiveLaw, delta: f64) -> CohesiveHistory {
+        CohesiveHistory {
+            delta_max: delta,
+            t_max: l.envelope(delta),
+        }
+    }
+
+    /// Central finite difference of the traction, step `h` on each jump component.
+    fn fd_tangent(l: &CohesiveLaw, h: &CohesiveHistory, jump: [f64; 2], step: f64) -> Matrix2<f64> {
+        let mut c = Matrix2::zeros();
+        for j in 0..2 {
+            let (mut jp, mut jm) = (jump, jump);
+            jp[j] += step;
+            jm[j] -= step;
+            let tp = l.evaluate(h, jp, LEN).traction;
+            let tm = l.evaluate(h, jm, LEN).traction;
+            c.set_column(j, &((tp - tm) / (2.0 * step)));
+        }
+        c
+    }
+
+    /// Norm-relative error of the analytic tangent against central FD; also checks the
+    /// branch is the expected one at the point and at the perturbed points.
+    fn check_tangent(
+        l: &CohesiveLaw,
+        h: &CohesiveHistory,
+        jump: [f64; 2],
+        step: f64,
+        branch: Branch,
+    ) {
+        let p = l.evaluate(h, jump, LEN);
+        assert_eq!(p.branch, branch, "jump {jump:?}");
+        for j in 0..2 {
+            for sign in [-1.0, 1.0] {
+                let mut jj = jump;
+                jj[j] += sign * step;
+                assert_eq!(l.evaluate(h, jj, LEN).branch, branch, "FD crosses a branch");
+            }
+        }
+        let fd = fd_tangent(l, h, jump, step);
+        let err = (p.tangent - fd).norm() / p.tangent.norm();
+        assert!(
+            err < 1e-6,
+            "jump {jump:?}: rel err {err:e}\n{}\n{fd}",
+            p.tangent
+        );
+        assert!((p.tangent - p.tangent.transpose()).norm() <= 1e-15 * p.tangent.norm());
+    }
+
+    #[test]
+    fn tangent_virgin_loading_pre_peak() {
+        let l = law(true);
+        let h = CohesiveHistory::default();
+        check_tangent(&l, &h, [0.3 * DC, 0.4 * DC], 1e-6 * DC, Branch::Loading);
+        check_tangent(&l, &h, [-0.5 * DC, 0.1 * DC], 1e-6 * DC, Branch::Loading);
+        check_tangent(&l, &h, [0.0, 0.7 * DC], 1e-6 * DC, Branch::Loading);
+    }
+
+    #[test]
+    fn tangent_post_peak_loading() {
+        let l = law(true);
+        let h = loaded_to(&l, 1.2 * DC);
+        check_tangent(&l, &h, [1.1 * DC, 1.5 * DC], 1e-6 * DC, Branch::Loading);
+        check_tangent(&l, &h, [-3.0 * DC, 0.2 * DC], 1e-6 * DC, Branch::Loading);
+        // Softening: the normal stiffness is negative past delta_c in pure mode I.
+        let p = l.evaluate(&h, [0.0, 1.5 * DC], LEN);
+        assert!(p.tangent[(1, 1)] < 0.0);
+    }
+
+    #[test]
+    fn tangent_unloading() {
+        let l = law(true);
+        let h = loaded_to(&l, 1.5 * DC);
+        check_tangent(&l, &h, [0.4 * DC, 0.5 * DC], 1e-6 * DC, Branch::Unloading);
+        check_tangent(&l, &h, [-0.4 * DC, 0.01 * DC], 1e-6 * DC, Branch::Unloading);
+        let k = h.t_max / h.delta_max;
+        let p = l.evaluate(&h, [0.4 * DC, 0.5 * DC], LEN);
+        let expected = Matrix2::new(k * 0.707 * 0.707, 0.0, 0.0, k);
+        assert!((p.tangent - expected).norm() <= 1e-15 * expected.norm());
+    }
+
+    #[test]
+    fn tangent_contact_both_penalties() {
+        for penalty in [
+            Penalty::PerLength { lambda_p: 1e7 },
+            Penalty::PerArea { stiffness: 3e6 },
+        ] {
+            let l = CohesiveLaw {
+                penalty,
+                ..law(true)
+            };
+            for h in [CohesiveHistory::default(), loaded_to(&l, 2.0 * DC)] {
+                check_tangent(&l, &h, [0.2 * DC, -0.1 * DC], 1e-6 * DC, Branch::Contact);
+                let p = l.evaluate(&h, [0.2 * DC, -0.1 * DC], LEN);
+                let kp = l.contact_stiffness(LEN);
+                assert_eq!(p.tangent, Matrix2::from_diagonal_element(kp));
+                let expected = Vector2::new(kp * (0.2 * DC), kp * (-0.1 * DC));
+                assert!((p.traction - expected).norm() <= 1e-15 * expected.norm());
+                assert_eq!(p.history, h);
+            }
+        }
+        let l = law(true);
+        assert_eq!(l.contact_stiffness(0.5), 0.5e7);
+    }
+
+    #[test]
+    fn tangent_near_zero_opening() {
+        let l = law(true);
+        let h = CohesiveHistory::default();
+        let d = 1e-9 * DC;
+        // Pure sliding, pure opening, and mixed with both signs of shear.
+        for jump in [
+            [d, 0.0],
+            [-d, 0.0],
+            [0.0, d],
+            [0.6 * d, 0.8 * d],
+            [-0.6 * d, 0.8 * d],
+        ] {
+            let step = 1e-6 * d;
+            if jump[1] == 0.0 {
+                // The FD in delta_n would enter contact at -step: check the law with
+                // contact off there (the open branch is the same function).
+                check_tangent(&law(false), &h, jump, step, Branch::Loading);
+            } else {
+                check_tangent(&l, &h, jump, step, Branch::Loading);
+            }
+        }
+    }
+
+    #[test]
+    fn tangent_exactly_zero_opening() {
+        let k0 = law(true).initial_stiffness();
+        let b2 = 0.707 * 0.707;
+        let expected = Matrix2::new(k0 * b2, 0.0, 0.0, k0);
+        let h = CohesiveHistory::default();
+        // Contact on: delta_n == 0 counts as open, the tangent is the cohesive one.
+        let p = law(true).evaluate(&h, [0.0, 0.0], LEN);
+        assert_eq!(p.branch, Branch::Loading);
+        assert_eq!(p.traction, Vector2::zeros());
+        assert!((p.tangent - expected).norm() <= 1e-15 * expected.norm());
+        assert_eq!(p.history, CohesiveHistory::default());
+        // -0.0 is open too.
+        assert_eq!(
+            law(true).evaluate(&h, [0.0, -0.0], LEN).branch,
+            Branch::Loading
+        );
+        // Contact off: the law is smooth enough at 0 for a central FD (error O(step)).
+        check_tangent(&law(false), &h, [0.0, 0.0], 1e-9 * DC, Branch::Loading);
+        // Contact on: one-sided check of the normal column (opening side).
+        let step = 1e-9 * DC;
+        let tp = law(true).evaluate(&h, [0.0, step], LEN).traction;
+        let col = tp / step;
+        assert!((col - expected.column(1)).norm() < 1e-6 * expected.norm());
+    }
+
+    #[test]
+    fn tiny_opening_is_exact() {
+        let l = law(true);
+        let h = CohesiveHistory::default();
+        let k0 = l.initial_stiffness();
+        let b2 = 0.707 * 0.707;
+        for jump in [
+            [1e-300, 0.0],
+            [0.0, 1e-300],
+            [3e-310, 4e-310],
+            [-1e-300, 1e-300],
+        ] {
+            let p = l.evaluate(&h, jump, LEN);
+            assert!(p
+                .traction
+                .iter()
+                .chain(p.tangent.iter())
+                .all(|v| v.is_finite()));
+            assert_eq!(p.branch, Branch::Loading);
+            let t_expected = Vector2::new(k0 * b2 * jump[0], k0 * jump[1]);
+            assert!((p.traction - t_expected).norm() <= 1e-14 * t_expected.norm());
+            let c_expected = Matrix2::new(k0 * b2, 0.0, 0.0, k0);
+            assert!((p.tangent - c_expected).norm() <= 1e-14 * c_expected.norm());
+            assert!(p.opening > 0.0 && p.history.delta_max == p.opening);
+        }
+    }
+
+    #[test]
+    fn peak_and_envelope() {
+        let l = law(true);
+        assert!((l.envelope(DC) - 4.0).abs() < 1e-14);
+        assert!(l.envelope(0.999 * DC) < 4.0 && l.envelope(1.001 * DC) < 4.0);
+        // Pure mode I loading reproduces the envelope; effective traction eq. 22.
+        let p = l.evaluate(&CohesiveHistory::default(), [0.0, DC], LEN);
+        assert!((p.traction[1] - 4.0).abs() < 1e-14);
+        let p = l.evaluate(&CohesiveHistory::default(), [0.8 * DC, 0.5 * DC], LEN);
+        let t_eff = (p.traction[0] * p.traction[0] / (0.707 * 0.707)
+            + p.traction[1] * p.traction[1])
+            .sqrt();
+        assert!((t_eff - l.envelope(p.opening)).abs() < 1e-12 * t_eff);
+        assert!((p.history.t_max - t_eff).abs() < 1e-12 * t_eff);
+    }
+
+    #[test]
+    fn traction_continuous_at_delta_max() {
+        let l = law(true);
+        for dmax in [0.3 * DC, DC, 2.5 * DC] {
+            let h = loaded_to(&l, dmax);
+            // Direction (beta ds, dn) = dmax (0.6, 0.8).
+            let dir = [0.6 / 0.707, 0.8];
+            let at = |f: f64| {
+                let d = dmax * f;
+                l.evaluate(&h, [dir[0] * d, dir[1] * d], LEN)
+            };
+            let (below, on, above) = (at(1.0 - 1e-12), at(1.0), at(1.0 + 1e-12));
+            assert_eq!(below.branch, Branch::Unloading);
+            assert_eq!(on.branch, Branch::Loading);
+            assert_eq!(above.branch, Branch::Loading);
+            let scale = on.traction.norm();
+            assert!((below.traction - on.traction).norm() < 1e-10 * scale);
+            assert!((above.traction - on.traction).norm() < 1e-10 * scale);
+            // The history does not move when reloading exactly to delta_max.
+            assert!((on.history.delta_max - dmax).abs() <= 1e-15 * dmax);
+            assert!((on.history.t_max - h.t_max).abs() <= 1e-14 * h.t_max);
+        }
+    }
+
+    #[test]
+    fn load_unload_reload_contact_sequence() {
+        let l = law(true);
+        let mut committed = CohesiveHistory::default();
+        let dir = |d: f64| [0.6 / 0.707 * d, 0.8 * d];
+        let mut step = |jump: [f64; 2], expected: Branch| {
+            let p = l.evaluate(&committed, jump, LEN);
+            assert_eq!(p.branch, expected, "jump {jump:?}");
+            committed = p.history;
+            (p, committed)
+        };
+        // Load to 0.5 delta_c and 1.5 delta_c.
+        let (_, h) = step(dir(0.5 * DC), Branch::Loading);
+        assert!((h.delta_max - 0.5 * DC).abs() < 1e-15);
+        assert!((h.t_max - l.envelope(0.5 * DC)).abs() < 1e-14);
+        let (_, h15) = step(dir(1.5 * DC), Branch::Loading);
+        assert!((h15.t_max - l.envelope(1.5 * DC)).abs() < 1e-14);
+        assert!(h15.t_max < 4.0);
+        // Unload to 0.7 delta_c: secant, history unchanged.
+        let (p, h) = step(dir(0.7 * DC), Branch::Unloading);
+        assert_eq!(h, h15);
+        let t_eff = (p.traction[0] / 0.707).hypot(p.traction[1]);
+        assert!((t_eff - h15.t_max / h15.delta_max * 0.7 * DC).abs() < 1e-12);
+        // Close the crack with some sliding: contact, history frozen.
+        let (p, h) = step([0.5 * DC, -0.01 * DC], Branch::Contact);
+        assert_eq!(h, h15);
+        assert!(p.traction[1] < 0.0);
+        // Reopen below delta_max: secant again; reload past it: the envelope.
+        let (_, h) = step(dir(1.2 * DC), Branch::Unloading);
+        assert_eq!(h, h15);
+        let (p, h) = step(dir(2.0 * DC), Branch::Loading);
+        assert!((h.delta_max - 2.0 * DC).abs() < 1e-15);
+        assert!((h.t_max - l.envelope(2.0 * DC)).abs() < 1e-14);
+        assert!((p.opening - 2.0 * DC).abs() < 1e-15);
+    }
+
+    #[test]
+    fn contact_off_is_symmetric() {
+        let l = law(false);
+        let h = loaded_to(&l, 0.8 * DC);
+        for (hist, branch) in [
+            (CohesiveHistory::default(), Branch::Loading),
+            (h, Branch::Unloading),
+        ] {
+            let up = l.evaluate(&hist, [0.2 * DC, 0.3 * DC], LEN);
+            let down = l.evaluate(&hist, [0.2 * DC, -0.3 * DC], LEN);
+            assert_eq!(up.branch, branch);
+            assert_eq!(down.branch, branch);
+            assert_eq!(down.traction, Vector2::new(up.traction[0], -up.traction[1]));
+            check_tangent(&l, &hist, [0.2 * DC, -0.3 * DC], 1e-6 * DC, branch);
+        }
+        // Compression damages the interface when contact is off.
+        let p = l.evaluate(&CohesiveHistory::default(), [0.0, -1.3 * DC], LEN);
+        assert!((p.history.delta_max - 1.3 * DC).abs() < 1e-15);
+    }
+
+    #[test]
+    fn zero_beta_has_no_shear_resistance() {
+        let l = CohesiveLaw {
+            beta: 0.0,
+            ..law(true)
+        };
+        let p = l.evaluate(&CohesiveHistory::default(), [5.0 * DC, 0.0], LEN);
+        assert_eq!(p.traction, Vector2::zeros());
+        assert_eq!(p.opening, 0.0);
+        assert!(p.tangent.iter().all(|v| v.is_finite()));
+        check_tangent(
+            &l,
+            &CohesiveHistory::default(),
+            [0.3 * DC, 0.5 * DC],
+            1e-6 * DC,
+            Branch::Loading,
+        );
+    }
+}
