@@ -15,15 +15,36 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-// Densest random packing we attempt; above it random sequential placement jams.
-#define MAX_AREA_FRACTION 0.7
+#define RVE_VERSION "0.1.0"
+#define RVE_VERSION_MAJOR 0
+#define RVE_VERSION_MINOR 1
+#define RVE_VERSION_PATCH 0
+/* ABI version: the soname suffix; bumped on any incompatible change. */
+#define RVE_ABI_VERSION 0
 
-// Upper bound on the estimated triangle count, to refuse runaway mesh sizes.
-#define MAX_TRIANGLES 2.0e6
+
+// Status code of a C call. Numbers are stable and never reused; a retired code stays
+// here as a comment.
+typedef enum RveStatus {
+  // Success.
+  RVE_STATUS_OK = 0,
+  // A required pointer argument was NULL.
+  RVE_STATUS_NULL_ARGUMENT = 1,
+  // The scene could not be read, parsed or validated.
+  RVE_STATUS_BAD_SCENE = 2,
+  // Meshing or mesh import failed.
+  RVE_STATUS_MESH_FAILED = 3,
+  // A Rust panic was caught at the C boundary (a bug: please report it).
+  RVE_STATUS_PANIC = 99,
+} RveStatus;
 
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Returns a static NUL-terminated description of a status code (`RveStatus` value);
+// unknown codes give "unknown status code". Never NULL; the caller must not free it.
+const char *rve_status_message(uint32_t code);
 
 // Returns the library version as a static NUL-terminated string `"major.minor.patch"`.
 // The pointer is valid for the lifetime of the process; the caller must not free it.

@@ -1,5 +1,7 @@
 //! Stable status codes returned by every C entry point.
 
+use std::ffi::c_char;
+
 /// Status code of a C call. Numbers are stable and never reused; a retired code stays
 /// here as a comment.
 #[repr(C)]
@@ -29,5 +31,44 @@ impl RveStatus {
             99 => RveStatus::Panic,
             _ => return None,
         })
+    }
+
+    /// A static NUL-terminated description.
+    fn message(self) -> &'static str {
+        match self {
+            RveStatus::Ok => "ok\0",
+            RveStatus::NullArgument => "a required pointer argument was NULL\0",
+            RveStatus::BadScene => "the scene could not be read, parsed or validated\0",
+            RveStatus::MeshFailed => "meshing or mesh import failed\0",
+            RveStatus::Panic => "internal error (panic caught at the C boundary)\0",
+        }
+    }
+}
+
+/// Returns a static NUL-terminated description of a status code (`RveStatus` value);
+/// unknown codes give "unknown status code". Never NULL; the caller must not free it.
+#[no_mangle]
+pub extern "C" fn rve_status_message(code: u32) -> *const c_char {
+    RveStatus::from_u32(code)
+        .map(RveStatus::message)
+        .unwrap_or("unknown status code\0")
+        .as_ptr()
+        .cast()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_round_trip_and_messages_are_terminated() {
+        for code in [0, 1, 2, 3, 99] {
+            let status = RveStatus::from_u32(code).unwrap();
+            assert_eq!(status as u32, code);
+            assert!(status.message().ends_with('\0'));
+        }
+        assert_eq!(RveStatus::from_u32(4), None);
+        let unknown = unsafe { std::ffi::CStr::from_ptr(rve_status_message(12345)) };
+        assert_eq!(unknown.to_str().unwrap(), "unknown status code");
     }
 }

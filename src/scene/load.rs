@@ -22,7 +22,18 @@ pub struct Scene {
 impl Scene {
     /// Parses and validates TOML text; relative paths resolve against `base_dir`.
     pub fn from_toml_str(text: &str, base_dir: impl Into<PathBuf>) -> Result<Self> {
-        let spec: SceneSpec = toml::from_str(text).map_err(|e| Error::SceneParse(e.to_string()))?;
+        // serde_path_to_error names the dotted key even where toml's own span is lost
+        // (inside the internally tagged `[geometry]` table).
+        let deserializer = toml::Deserializer::new(text);
+        let spec: SceneSpec = serde_path_to_error::deserialize(deserializer).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            if path.is_empty() || path == "." {
+                Error::SceneParse(inner.to_string())
+            } else {
+                Error::SceneParse(format!("key `{path}`: {inner}"))
+            }
+        })?;
         spec.validate()?;
         Ok(Scene {
             spec,

@@ -34,8 +34,11 @@ pub struct CellSpec {
     pub analysis: Analysis,
 }
 
-/// `[geometry]`: where the inclusions come from.
-#[derive(Clone, Debug, Deserialize, Serialize)]
+/// `[geometry]`: where the inclusions come from, chosen by `kind`.
+///
+/// Deserialized by hand (see [`GeometrySpec::deserialize`]) so that an error inside the
+/// table names the full key, e.g. `geometry.seed`; serde's internally tagged enums lose it.
+#[derive(Clone, Debug, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum GeometrySpec {
     /// No inclusions: a homogeneous matrix cell (patch tests, calibration).
@@ -46,6 +49,50 @@ pub enum GeometrySpec {
     Explicit(Explicit),
     /// A Gmsh mesh file whose physical groups name the phases.
     Gmsh(GmshSpec),
+}
+
+impl<'de> Deserialize<'de> for GeometrySpec {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let mut table = toml::Table::deserialize(deserializer)?;
+        let kind = match table.remove("kind") {
+            Some(toml::Value::String(kind)) => kind,
+            Some(other) => {
+                return Err(D::Error::custom(format!(
+                    "key `geometry.kind`: expected a string, got {other}"
+                )))
+            }
+            None => return Err(D::Error::custom("missing field `kind` in [geometry]")),
+        };
+        fn variant<T: serde::de::DeserializeOwned, E: serde::de::Error>(
+            table: toml::Table,
+        ) -> Result<T, E> {
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                let path = e.path().to_string();
+                let inner = e.into_inner();
+                if path == "." {
+                    E::custom(format!("in [geometry]: {inner}"))
+                } else {
+                    E::custom(format!("key `geometry.{path}`: {inner}"))
+                }
+            })
+        }
+        match kind.as_str() {
+            "homogeneous" => match table.keys().next() {
+                None => Ok(GeometrySpec::Homogeneous),
+                Some(key) => Err(D::Error::custom(format!(
+                    "key `geometry.{key}`: unknown for kind = \"homogeneous\""
+                ))),
+            },
+            "random" => variant(table).map(GeometrySpec::Random),
+            "explicit" => variant(table).map(GeometrySpec::Explicit),
+            "gmsh" => variant(table).map(GeometrySpec::Gmsh),
+            other => Err(D::Error::custom(format!(
+                "key `geometry.kind`: unknown kind `{other}`, expected one of \
+                 `homogeneous`, `random`, `explicit`, `gmsh`"
+            ))),
+        }
+    }
 }
 
 /// Inclusion shape for random placement.

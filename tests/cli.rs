@@ -1,0 +1,107 @@
+//! The `rve` binary: `rve mesh` JSON statistics, VTK and SVG output, error exit codes.
+
+mod common;
+
+use std::process::Command;
+
+fn rve(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_rve"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn mesh_json_has_the_documented_keys() {
+    let scene = common::repo("scenes/paper_rve.toml");
+    let out = rve(&["mesh", scene.to_str().unwrap(), "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in [
+        "nodes",
+        "triangles",
+        "matrix_triangles",
+        "inclusion_triangles",
+        "interface_elements",
+        "inclusion_area_fraction",
+        "min_angle_deg",
+        "periodic_sides_match",
+    ] {
+        assert!(v.get(key).is_some(), "missing key {key}");
+    }
+    assert_eq!(v["periodic_sides_match"], serde_json::Value::Bool(true));
+    let t = v["triangles"].as_u64().unwrap();
+    assert_eq!(
+        t,
+        v["matrix_triangles"].as_u64().unwrap() + v["inclusion_triangles"].as_u64().unwrap()
+    );
+}
+
+#[test]
+fn embedded_default_writes_vtk_and_svg() {
+    let dir = std::env::temp_dir().join(format!("rve-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (vtu, svg) = (dir.join("rve.vtu"), dir.join("rve.svg"));
+    let out = rve(&[
+        "mesh",
+        "--json",
+        "--vtk",
+        vtu.to_str().unwrap(),
+        "--svg",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (tri, itz) = (
+        v["triangles"].as_u64().unwrap(),
+        v["interface_elements"].as_u64().unwrap(),
+    );
+
+    let vtk = std::fs::read_to_string(&vtu).unwrap();
+    assert!(vtk.contains(&format!("NumberOfCells=\"{}\"", tri + itz)));
+    assert!(vtk.contains(&format!("NumberOfPoints=\"{}\"", v["nodes"])));
+    // Cell types: tri triangles (5) then itz quads (9).
+    let types = vtk
+        .split("Name=\"types\" format=\"ascii\">")
+        .nth(1)
+        .unwrap();
+    let types: Vec<&str> = types
+        .split("</DataArray>")
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .collect();
+    assert_eq!(types.iter().filter(|t| **t == "5").count() as u64, tri);
+    assert_eq!(types.iter().filter(|t| **t == "9").count() as u64, itz);
+    assert!(vtk.trim_end().ends_with("</VTKFile>"));
+
+    let pic = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(pic.matches("<polygon").count() as u64, tri);
+    assert_eq!(pic.matches("<line").count() as u64, itz);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_scene_exits_nonzero_with_the_key_in_the_message() {
+    let dir = std::env::temp_dir().join(format!("rve-cli-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("bad.toml");
+    std::fs::write(
+        &path,
+        common::paper_scene_with(&[("delta_c = 0.0002", "delta_c = 0.0")]),
+    )
+    .unwrap();
+    let out = rve(&["mesh", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("materials.itz.delta_c"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
