@@ -227,3 +227,65 @@ fn explicit_inclusions_and_homogeneous_cells() {
     assert!(micro.mesh.interfaces.is_empty());
     check_mesh(&micro.mesh, None);
 }
+
+#[test]
+fn gmsh_scene_gets_itz_elements_between_the_mapped_phases() {
+    let micro = build_microstructure(&common::scene("scenes/gmsh_two_circles.toml")).unwrap();
+    check_mesh(&micro.mesh, None);
+    assert!(!micro.mesh.interfaces.is_empty());
+    // The ITZ is closed around each aggregate: every side-A node has exactly two ITZ edges.
+    let mut degree = std::collections::HashMap::new();
+    for e in &micro.mesh.interfaces {
+        *degree.entry(e.nodes[0]).or_insert(0) += 1;
+        *degree.entry(e.nodes[1]).or_insert(0) += 1;
+    }
+    assert!(degree.values().all(|&d| d == 2));
+}
+
+#[test]
+fn our_mesh_survives_a_gmsh_22_and_41_round_trip() {
+    use rve::mesh::gmsh::{parse_msh, write_msh22, write_msh41};
+    use rve::mesh::{insert_itz, triangulate};
+    let scene = common::scene("scenes/paper_rve.toml");
+    let micro = build_microstructure(&scene).unwrap();
+    let polygons: Vec<Vec<[f64; 2]>> = micro.inclusions.iter().map(|i| i.polygon(0.48)).collect();
+    let phase_mesh = triangulate(10.0, 10.0, &polygons, 0.84, 25.0).unwrap();
+    for version in ["2.2", "4.1"] {
+        let mut bytes = Vec::new();
+        if version == "2.2" {
+            write_msh22(&phase_mesh, &mut bytes).unwrap();
+        } else {
+            write_msh41(&phase_mesh, &mut bytes).unwrap();
+        }
+        let text = String::from_utf8(bytes).unwrap();
+        let back = parse_msh(
+            &text,
+            std::path::Path::new("roundtrip.msh"),
+            "matrix",
+            &["aggregate".to_string()],
+        )
+        .unwrap();
+        assert_eq!(back.nodes.len(), phase_mesh.nodes.len(), "{version}");
+        let mesh = insert_itz(back, 10.0, 10.0).unwrap();
+        assert_eq!(mesh.nodes.len(), micro.mesh.nodes.len(), "{version}");
+        assert_eq!(
+            mesh.triangles.len(),
+            micro.mesh.triangles.len(),
+            "{version}"
+        );
+        assert_eq!(
+            mesh.interfaces.len(),
+            micro.mesh.interfaces.len(),
+            "{version}"
+        );
+        let (a, b) = (MeshStats::of(&mesh), MeshStats::of(&micro.mesh));
+        assert!((a.inclusion_area_fraction - b.inclusion_area_fraction).abs() < 1e-12);
+        // The text format keeps coordinates to full precision: ITZ geometry is identical.
+        let mut la: Vec<f64> = mesh.interfaces.iter().map(|e| e.length).collect();
+        let mut lb: Vec<f64> = micro.mesh.interfaces.iter().map(|e| e.length).collect();
+        la.sort_by(f64::total_cmp);
+        lb.sort_by(f64::total_cmp);
+        assert_eq!(la, lb, "{version}");
+        check_mesh(&mesh, None);
+    }
+}
