@@ -27,10 +27,17 @@ fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
-/// True when the closed segments `ab` and `cd` cross (proper or touching).
+/// True when the closed segments `ab` and `cd` cross or touch (collinear segments only
+/// when their extents overlap).
 pub fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     let (o1, o2) = (orient(a, b, c), orient(a, b, d));
     let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+    if o1 == 0.0 && o2 == 0.0 {
+        // Collinear: overlap of the coordinate ranges along both axes.
+        let overlap =
+            |k: usize| a[k].min(b[k]) <= c[k].max(d[k]) && c[k].min(d[k]) <= a[k].max(b[k]);
+        return overlap(0) && overlap(1);
+    }
     (o1 * o2 <= 0.0) && (o3 * o4 <= 0.0)
 }
 
@@ -109,7 +116,26 @@ mod tests {
         assert!(point_in_polygon([0.5, 0.5], &sq));
         assert!(!point_in_polygon([1.5, 0.5], &sq));
         let moved: Vec<[f64; 2]> = sq.iter().map(|p| [p[0] + 1.25, p[1]]).collect();
-        assert!((polygon_distance(&sq, &moved) - 0.25).abs() < 1e-15);
+        let d = polygon_distance(&sq, &moved);
+        assert!((d - 0.25).abs() < 1e-14, "distance {d}");
+        assert!(!segments_intersect(
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.25, 0.0],
+            [2.0, 0.0]
+        ));
+        assert!(segments_intersect(
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [0.5, 0.0],
+            [2.0, 0.0]
+        ));
+        assert!(segments_intersect(
+            [0.0, 0.0],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [1.0, 0.0]
+        ));
         let crossing: Vec<[f64; 2]> = sq.iter().map(|p| [p[0] + 0.5, p[1] + 0.5]).collect();
         assert_eq!(polygon_distance(&sq, &crossing), 0.0);
         assert_eq!(bounding_box(&crossing), [0.5, 0.5, 1.5, 1.5]);
