@@ -31,6 +31,26 @@ pub enum Error {
     /// Meshing failed or produced an unusable mesh.
     #[error("mesh: {0}")]
     Mesh(String),
+    /// The macro strain is NaN, infinite or absurdly large.
+    #[error("strain {strain:?}: {reason}")]
+    BadStrain { strain: [f64; 3], reason: String },
+    /// The RVE solver failed even after sub-stepping; the committed state is unchanged.
+    #[error(
+        "RVE solver failed: {reason} (after {depth} bisections of the strain increment); \
+         retry with a step ratio of {suggested_step_ratio}"
+    )]
+    Solve {
+        reason: String,
+        depth: u32,
+        /// Suggested ratio of the next macro increment to the failed one (UMAT's PNEWDT).
+        suggested_step_ratio: f64,
+    },
+    /// A workspace was used with a model it was not made for.
+    #[error("workspace belongs to another model (make one with Model::workspace)")]
+    WorkspaceMismatch,
+    /// `commit` without a successful trial `update` since the last commit/revert.
+    #[error("no trial to commit: call update first")]
+    NoTrial,
 }
 
 impl Error {

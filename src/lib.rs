@@ -8,18 +8,28 @@
 //! `ffi -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
 //! with `scene` describing everything and `geometry` producing microstructures.
 
+pub mod assembly;
 pub mod cli;
+pub mod constraint;
 pub mod element;
 pub mod error;
 pub mod ffi;
 pub mod geometry;
+pub mod homogenization;
 pub mod interface;
 pub mod io;
 pub mod material;
 pub mod mesh;
+pub mod model;
 pub mod scene;
+pub mod solver;
+pub mod state;
 
 pub use error::{Error, Result};
+pub use model::{Instance, Model, Response};
+pub use scene::Scene;
+pub use solver::TangentRequest;
+pub use state::{State, Workspace};
 
 /// The crate version, `major.minor.patch`, as in Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -1,6 +1,9 @@
 //! The `rve` command-line tool: argument parsing and the subcommands.
 
 mod mesh_cmd;
+mod run_cmd;
+
+pub use run_cmd::{path_points, CSV_HEADER};
 
 use std::path::PathBuf;
 
@@ -24,6 +27,8 @@ struct Cli {
 enum Command {
     /// Build the RVE mesh of a scene and print its statistics.
     Mesh(mesh_cmd::MeshArgs),
+    /// Follow the scene's strain path and write DIR/response.csv.
+    Run(run_cmd::RunArgs),
 }
 
 /// Loads `path`, or the embedded paper scene when no path is given.
@@ -39,6 +44,7 @@ pub fn main() -> i32 {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Mesh(args) => mesh_cmd::run(&args),
+        Command::Run(args) => run_cmd::run(&args),
     };
     match result {
         Ok(()) => 0,

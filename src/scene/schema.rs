@@ -4,7 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::material::Analysis;
+use crate::element::InterfaceQuadrature;
+use crate::material::{Analysis, IsotropicElastic};
 
 /// The whole scene file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -208,14 +209,8 @@ pub struct MeshSpec {
     pub interface_quadrature: InterfaceQuadratureSpec,
 }
 
-/// Interface quadrature: the paper's 3-point Gauss, or 2-point Newton-Cotes (Lobatto).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum InterfaceQuadratureSpec {
-    #[default]
-    Gauss3,
-    Lobatto2,
-}
+/// Interface quadrature: `"gauss3"` (the paper) or `"lobatto2"` (Newton-Cotes).
+pub type InterfaceQuadratureSpec = InterfaceQuadrature;
 
 /// `[materials]`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -230,13 +225,8 @@ pub struct MaterialsSpec {
     pub itz: Option<ItzSpec>,
 }
 
-/// Isotropic linear elasticity.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ElasticSpec {
-    pub young: f64,
-    pub poisson: f64,
-}
+/// Isotropic linear elasticity: `{ young, poisson }` (the material type itself).
+pub type ElasticSpec = IsotropicElastic;
 
 /// The cohesive-contact law of the ITZ (paper eqs. 20-25, 36-37).
 #[derive(Clone, Copy, Debug, Deserialize, Serialize)]

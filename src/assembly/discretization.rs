@@ -1,0 +1,241 @@
+//! The discrete RVE equilibrium problem (paper eq. 14) on the fluctuation:
+//!
+//! ```text
+//! R(x; eps) = K_const x + G eps + F_itz(x) = 0,     x = [u~_r; lambda]
+//! K(x)      = dR/dx = K_const + K_itz(x)
+//! ```
+//!
+//! The bulk is linear elastic, so its contribution `sum_e A_e B_e^T D_e (eps + B_e u~_e)`
+//! splits into the constant stiffness `K_bulk` (in `K_const`) and the constant coupling
+//! `G = dR/d eps = sum_e A_e B_e^T D_e`. `K_const` also holds the multiplier rows of the
+//! minimal BC, scaled by the matrix Young's modulus for balance. The macro strain does not
+//! enter the interface jumps: both faces of an ITZ element sit at the same reference point,
+//! so `eps y` has no jump there.
+
+use nalgebra::{Matrix3, SMatrix, SVector};
+
+use super::pattern::{Pattern, NO_SLOT};
+use crate::constraint::{DofMap, FIXED};
+use crate::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature};
+use crate::error::Result;
+use crate::interface::{CohesiveHistory, CohesiveLaw};
+use crate::material::{Analysis, IsotropicElastic};
+use crate::mesh::{Mesh, Phase};
+use crate::scene::BoundaryKind;
+
+/// A bulk triangle, precomputed: strain operator, area, elastic matrix, dofs.
+#[derive(Clone, Debug)]
+pub struct BulkElement {
+    pub b: SMatrix<f64, 3, 6>,
+    pub area: f64,
+    pub d: Matrix3<f64>,
+    pub poisson: f64,
+    pub dofs: [u32; 6],
+}
+
+/// Branch counts of the interface quadrature points after an evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SystemEvaluation {
+    pub loading: usize,
+    pub unloading: usize,
+    pub contact: usize,
+}
+
+/// Everything needed to assemble the RVE system; immutable and shared.
+#[derive(Clone, Debug)]
+pub struct Discretization {
+    pub analysis: Analysis,
+    pub dofs: DofMap,
+    pub bulk: Vec<BulkElement>,
+    pub interfaces: Vec<InterfaceGeometry>,
+    pub interface_dofs: Vec<[u32; 8]>,
+    /// `None` when the scene has no cohesive ITZ (then there are no interface elements).
+    pub law: Option<CohesiveLaw>,
+    pub quadrature: InterfaceQuadrature,
+    pub pattern: Pattern,
+    /// Values of `K_const` on the pattern.
+    pub k_const: Vec<f64>,
+    /// `G = dR/d eps`, `n x 3`, column-major.
+    pub g: Vec<f64>,
+    /// Cell area `V_mu`.
+    pub volume: f64,
+}
+
+/// Inputs of [`Discretization::new`] besides the mesh.
+pub struct DiscretizationSpec {
+    pub analysis: Analysis,
+    pub matrix: IsotropicElastic,
+    pub aggregate: IsotropicElastic,
+    pub law: Option<CohesiveLaw>,
+    pub quadrature: InterfaceQuadrature,
+    pub boundary: BoundaryKind,
+}
+
+impl Discretization {
+    pub fn new(mesh: &Mesh, spec: &DiscretizationSpec) -> Result<Self> {
+        let dofs = DofMap::build(mesh, spec.boundary);
+        let bulk: Vec<BulkElement> = mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let coords = t.nodes.map(|i| mesh.nodes[i]);
+                let (b, signed_area) = triangle::b_matrix(&coords);
+                let material = match t.phase {
+                    Phase::Matrix => spec.matrix,
+                    Phase::Inclusion => spec.aggregate,
+                };
+                BulkElement {
+                    b,
+                    area: signed_area.abs(),
+                    d: material.stiffness(spec.analysis),
+                    poisson: material.poisson,
+                    dofs: dofs.element_dofs(t.nodes),
+                }
+            })
+            .collect();
+        let (interfaces, interface_dofs): (Vec<_>, Vec<_>) = if spec.law.is_some() {
+            mesh.interfaces
+                .iter()
+                .map(|e| (InterfaceGeometry::from(e), dofs.element_dofs(e.nodes)))
+                .unzip()
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let triangle_dofs: Vec<[u32; 6]> = bulk.iter().map(|e| e.dofs).collect();
+        let pattern = Pattern::build(&dofs, &triangle_dofs, &interface_dofs)?;
+
+        let mut k_const = vec![0.0; pattern.nnz()];
+        for (e, slots) in bulk.iter().zip(&pattern.triangle_slots) {
+            let k = triangle::stiffness(&e.b, e.area, &e.d);
+            scatter(&mut k_const, slots, k.transpose().as_slice());
+        }
+        let scale = spec.matrix.young;
+        for &(s_rm, s_mr, w) in &pattern.constraint_slots {
+            k_const[s_rm as usize] += scale * w;
+            k_const[s_mr as usize] += scale * w;
+        }
+
+        let n = pattern.n;
+        let mut g = vec![0.0; 3 * n];
+        for e in &bulk {
+            let btd = e.area * e.b.transpose() * e.d;
+            for (i, &r) in e.dofs.iter().enumerate() {
+                if r != FIXED {
+                    for k in 0..3 {
+                        g[k * n + r as usize] += btd[(i, k)];
+                    }
+                }
+            }
+        }
+        Ok(Discretization {
+            analysis: spec.analysis,
+            dofs,
+            bulk,
+            interfaces,
+            interface_dofs,
+            law: spec.law,
+            quadrature: spec.quadrature,
+            pattern,
+            k_const,
+            g,
+            volume: mesh.cell_area(),
+        })
+    }
+
+    /// Number of unknowns.
+    pub fn n(&self) -> usize {
+        self.pattern.n
+    }
+
+    /// Quadrature points per interface element.
+    pub fn points_per_interface(&self) -> usize {
+        self.quadrature.num_points()
+    }
+
+    /// Length of the interface history array (elements x points).
+    pub fn history_len(&self) -> usize {
+        self.interfaces.len() * self.points_per_interface()
+    }
+
+    /// Gathers the element vector of `dofs` from the unknowns `x` (fixed dofs are zero).
+    fn gather<const D: usize>(x: &[f64], dofs: &[u32; D]) -> SVector<f64, D> {
+        SVector::<f64, D>::from_fn(|i, _| {
+            if dofs[i] == FIXED {
+                0.0
+            } else {
+                x[dofs[i] as usize]
+            }
+        })
+    }
+
+    /// Evaluates the residual `r = R(x; eps)` and, if asked, the tangent values `k` on the
+    /// pattern, with interface histories `committed` (start of the step); the trial
+    /// histories go to `trial`. Allocates nothing.
+    pub fn evaluate(
+        &self,
+        x: &[f64],
+        eps: &[f64; 3],
+        committed: &[CohesiveHistory],
+        trial: &mut [CohesiveHistory],
+        r: &mut [f64],
+        k: Option<&mut [f64]>,
+    ) -> SystemEvaluation {
+        // Linear part: K_const x + G eps.
+        self.pattern.mul_vec(&self.k_const, x, r);
+        let n = self.n();
+        for (c, &e) in eps.iter().enumerate() {
+            if e != 0.0 {
+                for (ri, gi) in r.iter_mut().zip(&self.g[c * n..(c + 1) * n]) {
+                    *ri += gi * e;
+                }
+            }
+        }
+        let mut k = k;
+        if let Some(k) = k.as_deref_mut() {
+            k.copy_from_slice(&self.k_const);
+        }
+        let mut counts = SystemEvaluation::default();
+        let Some(law) = &self.law else {
+            return counts;
+        };
+        let np = self.points_per_interface();
+        for (e, (geometry, dofs)) in self.interfaces.iter().zip(&self.interface_dofs).enumerate() {
+            let u = Self::gather(x, dofs);
+            let range = e * np..(e + 1) * np;
+            let resp = interface4::evaluate(
+                geometry,
+                self.quadrature,
+                law,
+                &committed[range.clone()],
+                &u,
+                &mut trial[range],
+            );
+            counts.loading += resp.loading;
+            counts.unloading += resp.unloading;
+            counts.contact += resp.contact;
+            for (i, &d) in dofs.iter().enumerate() {
+                if d != FIXED {
+                    r[d as usize] += resp.force[i];
+                }
+            }
+            if let Some(k) = k.as_deref_mut() {
+                // Row-major slots; nalgebra is column-major, so read the transpose.
+                scatter(
+                    k,
+                    &self.pattern.interface_slots[e],
+                    resp.stiffness.transpose().as_slice(),
+                );
+            }
+        }
+        counts
+    }
+}
+
+/// Adds a row-major element matrix into the pattern values.
+fn scatter(values: &mut [f64], slots: &[u32], entries: &[f64]) {
+    for (&s, &v) in slots.iter().zip(entries) {
+        if s != NO_SLOT {
+            values[s as usize] += v;
+        }
+    }
+}

@@ -1,0 +1,7 @@
+//! Assembly of the RVE equilibrium system into one fixed sparsity pattern per model.
+
+mod discretization;
+mod pattern;
+
+pub use discretization::{BulkElement, Discretization, DiscretizationSpec, SystemEvaluation};
+pub use pattern::{Pattern, NO_SLOT};

@@ -1,0 +1,196 @@
+//! The shared model of one scene: mesh, materials, constraint map, sparsity pattern,
+//! symbolic factorization, homogenization operators and the elastic tangent.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use faer::sparse::linalg::lu::SymbolicLu;
+
+use crate::assembly::{Discretization, DiscretizationSpec};
+use crate::error::{Error, Result};
+use crate::homogenization::Homogenizer;
+use crate::interface::{CohesiveLaw, Penalty};
+use crate::mesh::{build_microstructure, Mesh, Microstructure};
+use crate::scene::{Scene, SolverSpec};
+use crate::solver::{solve_increment, symbolic_lu, IncrementReport, TangentRequest};
+use crate::state::{State, Workspace};
+
+/// Largest strain component accepted; beyond it a small-strain RVE makes no sense.
+pub const MAX_STRAIN: f64 = 1.0;
+
+static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(1);
+
+/// Result of an update: homogenized stress, tangent and counters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Response {
+    /// `[s_xx, s_yy, s_xy]`.
+    pub stress: [f64; 3],
+    /// Row-major `d stress_i / d strain_j` (zeros when not requested).
+    pub tangent: [f64; 9],
+    /// Out-of-plane stress (plane strain; 0 in plane stress).
+    pub s_zz: f64,
+    pub report: IncrementReport,
+}
+
+/// Everything that instances of one scene share. Immutable once built.
+pub struct Model {
+    id: u64,
+    pub scene: Scene,
+    pub microstructure: Microstructure,
+    pub disc: Discretization,
+    pub hom: Homogenizer,
+    pub symbolic: SymbolicLu<usize>,
+    pub solver: SolverSpec,
+    /// Homogenized tangent of the virgin RVE (row-major).
+    pub elastic_tangent: [f64; 9],
+}
+
+impl std::fmt::Debug for Model {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Model")
+            .field("id", &self.id)
+            .field("unknowns", &self.disc.n())
+            .field("interfaces", &self.disc.interfaces.len())
+            .finish()
+    }
+}
+
+impl Model {
+    /// Meshes the scene and builds everything instances share.
+    pub fn from_scene(scene: &Scene) -> Result<Self> {
+        let microstructure = build_microstructure(scene)?;
+        Self::from_mesh(scene, microstructure)
+    }
+
+    /// Builds the model on an already built microstructure (tests, custom meshes).
+    pub fn from_mesh(scene: &Scene, microstructure: Microstructure) -> Result<Self> {
+        let spec = &scene.spec;
+        let law = if spec.effects.cohesive {
+            spec.materials.itz.map(|itz| CohesiveLaw {
+                sigma_c: itz.sigma_c,
+                delta_c: itz.delta_c,
+                beta: itz.beta,
+                penalty: match (itz.penalty.lambda_p, itz.penalty.stiffness) {
+                    (Some(lambda_p), _) => Penalty::PerLength { lambda_p },
+                    (None, Some(stiffness)) => Penalty::PerArea { stiffness },
+                    (None, None) => Penalty::PerArea { stiffness: 0.0 },
+                },
+                contact: spec.effects.contact,
+            })
+        } else {
+            None
+        };
+        let mesh: &Mesh = &microstructure.mesh;
+        if spec.boundary.kind == crate::scene::BoundaryKind::Periodic && !mesh.boundary.sides_match
+        {
+            return Err(Error::scene(
+                "boundary.kind",
+                "periodic needs matching nodes on opposite sides, and this mesh has none",
+            ));
+        }
+        let disc = Discretization::new(
+            mesh,
+            &DiscretizationSpec {
+                analysis: spec.cell.analysis,
+                matrix: spec.materials.matrix,
+                aggregate: spec.materials.aggregate.unwrap_or(spec.materials.matrix),
+                law,
+                quadrature: spec.mesh.interface_quadrature,
+                boundary: spec.boundary.kind,
+            },
+        )?;
+        let hom = Homogenizer::new(&disc);
+        let symbolic = symbolic_lu(&disc.pattern.symbolic)?;
+        let mut model = Model {
+            id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
+            scene: scene.clone(),
+            microstructure,
+            disc,
+            hom,
+            symbolic,
+            solver: spec.solver,
+            elastic_tangent: [0.0; 9],
+        };
+        // The virgin tangent: one converged "update" at zero strain.
+        let mut ws = model.workspace();
+        let state = model.new_state();
+        let mut trial = model.new_state();
+        let response = model.update(
+            &state,
+            [0.0; 3],
+            &mut ws,
+            &mut trial,
+            TangentRequest::Consistent,
+        )?;
+        model.elastic_tangent = response.tangent;
+        Ok(model)
+    }
+
+    /// A virgin state for a new instance.
+    pub fn new_state(&self) -> State {
+        State::virgin(self.disc.n(), self.disc.history_len())
+    }
+
+    /// A workspace for one thread.
+    pub fn workspace(&self) -> Workspace {
+        Workspace::new(
+            &self.disc,
+            &self.symbolic,
+            self.solver.max_iterations as usize,
+            self.id,
+        )
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.microstructure.mesh
+    }
+
+    /// Trial update: solves the RVE at macro strain `strain` starting from `committed`,
+    /// writes the converged trial state into `trial`, and returns the homogenized stress
+    /// and (if asked) the consistent tangent. Never modifies `committed`; identical inputs
+    /// give bit-identical outputs.
+    pub fn update(
+        &self,
+        committed: &State,
+        strain: [f64; 3],
+        ws: &mut Workspace,
+        trial: &mut State,
+        request: TangentRequest,
+    ) -> Result<Response> {
+        if ws.model_id != self.id {
+            return Err(Error::WorkspaceMismatch);
+        }
+        if strain.iter().any(|e| !e.is_finite()) {
+            return Err(Error::BadStrain {
+                strain,
+                reason: "not finite".into(),
+            });
+        }
+        if strain.iter().any(|e| e.abs() > MAX_STRAIN) {
+            return Err(Error::BadStrain {
+                strain,
+                reason: format!("a component exceeds {MAX_STRAIN} (small-strain model)"),
+            });
+        }
+        let mut tangent = [0.0; 9];
+        let report = solve_increment(
+            &self.disc,
+            &self.hom,
+            &self.symbolic,
+            &self.solver,
+            committed,
+            strain,
+            request,
+            ws,
+            trial,
+            &mut tangent,
+        )?;
+        let (stress, s_zz) = self.hom.stress(&self.disc, &strain, &trial.unknowns);
+        Ok(Response {
+            stress,
+            tangent,
+            s_zz,
+            report,
+        })
+    }
+}

@@ -1,0 +1,8 @@
+//! Solution of the RVE equilibrium problem: sparse LU, Newton-Raphson with line search,
+//! sub-stepping of the macro strain increment, and the consistent homogenized tangent.
+
+mod linear;
+mod newton;
+
+pub use linear::{factorize, solve_in_place, symbolic_lu};
+pub use newton::{solve_increment, IncrementReport, TangentRequest};

@@ -1,0 +1,403 @@
+//! Newton-Raphson on the fluctuation with line search and sub-stepping.
+//!
+//! # Convergence test
+//! An iterate converges when `||R||_2 <= tolerance * max(||G eps||_2, 1e-8 ||G||_F)`:
+//! the residual relative to the load the macro strain puts on the RVE (`G eps` is the
+//! residual of the zero fluctuation in the absence of interfaces). The floor makes strains
+//! below 1e-8 count as 1e-8, so a zero target strain still has a meaningful test.
+//!
+//! # Line search
+//! Backtracking on `||R||`: the full step is accepted when it reduces the residual norm;
+//! otherwise the step is halved up to five times, and the step with the smallest residual
+//! is taken (the smallest is still taken if none reduces it, so Newton can cross the kinks
+//! of the law). Switch off with `solver.line_search = false`.
+//!
+//! # Sub-stepping (Somer et al. 2009)
+//! If an increment fails (no convergence in `max_iterations`, a singular or non-finite
+//! system), it is bisected and the halves are solved in turn, each from the converged
+//! state (fluctuation and interface history) of the previous one; after two successes in
+//! a row the step doubles again. Past `max_substep_depth` bisections the update fails
+//! with a suggested step ratio (UMAT's PNEWDT), and the committed state is untouched
+//! because every iterate lives in the trial state.
+//!
+//! # Tangent
+//! `D_hom = D_Taylor - (1/V) G^T K^-1 G` at the converged state (eq. 18), with `K` the
+//! consistent tangent there. No new factorization in the usual case: `K^-1 G` is computed
+//! with the last factorization of the Newton loop (`K` at the previous iterate) and
+//! corrected by iterative refinement against the converged `K`, until `D_hom` changes by
+//! less than 1e-13 relative; if the two matrices are bitwise equal (elastic, unloading and
+//! contact branches) there is nothing to refine. Only when refinement stalls (a branch
+//! switched in the last step) or the loop did no iteration is the converged `K` factorized.
+//! With sub-steps, the tangent is that of the last sub-step.
+
+use faer::dyn_stack::MemStack;
+use faer::sparse::linalg::lu::SymbolicLu;
+
+use super::linear::{factorize, solve_in_place};
+use crate::assembly::Discretization;
+use crate::error::{Error, Result};
+use crate::homogenization::Homogenizer;
+use crate::scene::SolverSpec;
+use crate::state::{State, Workspace};
+
+/// What tangent the caller wants back.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TangentRequest {
+    /// The consistent homogenized tangent (eq. 18).
+    #[default]
+    Consistent,
+    /// No tangent: stress only (skips the tangent solve).
+    None,
+}
+
+/// Counters of one update.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IncrementReport {
+    /// Newton corrections summed over sub-steps.
+    pub iterations: u32,
+    /// Accepted sub-steps (1 when the increment converged in one go).
+    pub substeps: u32,
+    /// Numeric LU factorizations, including any for the tangent.
+    pub factorizations: u32,
+    /// Interface points on the loading / unloading / contact branch at the end.
+    pub loading: usize,
+    pub unloading: usize,
+    pub contact: usize,
+}
+
+/// Why one Newton loop failed.
+enum Failure {
+    NotConverged { residual: f64, reference: f64 },
+    Singular(String),
+    NonFinite,
+}
+
+impl Failure {
+    fn describe(&self, max_iterations: u32) -> String {
+        match self {
+            Failure::NotConverged {
+                residual,
+                reference,
+            } => format!(
+                "no convergence in {max_iterations} iterations (relative residual {:.3e})",
+                residual / reference
+            ),
+            Failure::Singular(e) => format!("singular RVE tangent ({e})"),
+            Failure::NonFinite => "non-finite residual or correction".to_string(),
+        }
+    }
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|a| a * a).sum::<f64>().sqrt()
+}
+
+/// Residual reference of the convergence test (see module docs).
+fn reference(disc: &Discretization, eps: &[f64; 3]) -> f64 {
+    let n = disc.n();
+    let mut sq = 0.0;
+    for i in 0..n {
+        let gi = disc.g[i] * eps[0] + disc.g[n + i] * eps[1] + disc.g[2 * n + i] * eps[2];
+        sq += gi * gi;
+    }
+    let g_frob = norm(&disc.g);
+    sq.sqrt().max(1e-8 * g_frob)
+}
+
+/// One Newton loop at fixed macro strain `eps` from the unknowns `x`, with interface
+/// history `ws.hist_base`. On success `x` is converged, `ws.r`/`ws.k`/`ws.hist_trial`
+/// belong to it, and `ws.lu` holds the last factorization (if any).
+fn newton(
+    disc: &Discretization,
+    symbolic: &SymbolicLu<usize>,
+    settings: &SolverSpec,
+    eps: &[f64; 3],
+    x: &mut [f64],
+    ws: &mut Workspace,
+) -> std::result::Result<(u32, u32), Failure> {
+    let reference = reference(disc, eps);
+    let tolerance = settings.tolerance * reference;
+    ws.factored = false;
+    ws.residuals.clear();
+    disc.evaluate(
+        x,
+        eps,
+        &ws.hist_base,
+        &mut ws.hist_trial,
+        &mut ws.r,
+        Some(&mut ws.k),
+    );
+    let mut rnorm = norm(&ws.r);
+    let mut factorizations = 0;
+    let mut iteration = 0u32;
+    loop {
+        ws.residuals.push(rnorm / reference);
+        if !rnorm.is_finite() {
+            return Err(Failure::NonFinite);
+        }
+        if rnorm <= tolerance {
+            return Ok((iteration, factorizations));
+        }
+        if iteration >= settings.max_iterations {
+            return Err(Failure::NotConverged {
+                residual: rnorm,
+                reference,
+            });
+        }
+        let stack = MemStack::new(&mut ws.stack);
+        factorize(symbolic, &disc.pattern.symbolic, &ws.k, &mut ws.lu, stack)
+            .map_err(|e| Failure::Singular(format!("{e:?}")))?;
+        factorizations += 1;
+        ws.k_factored.copy_from_slice(&ws.k);
+        ws.factored = true;
+        ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
+        solve_in_place(
+            symbolic,
+            &ws.lu,
+            &mut ws.dx,
+            1,
+            MemStack::new(&mut ws.stack),
+        );
+        if ws.dx.iter().any(|d| !d.is_finite()) {
+            return Err(Failure::Singular("non-finite Newton correction".into()));
+        }
+
+        // Line search on ||R||: try alpha = 1, 1/2, ..., 1/32; keep the best.
+        let mut alpha = 1.0;
+        let (mut best_alpha, mut best_norm) = (1.0, f64::INFINITY);
+        let halvings = if settings.line_search { 5 } else { 0 };
+        for trial in 0..=halvings {
+            try_step(disc, eps, x, alpha, ws);
+            let n_try = norm(&ws.r_try);
+            if n_try < best_norm {
+                best_norm = n_try;
+                best_alpha = alpha;
+            }
+            if n_try < rnorm || trial == halvings {
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if best_alpha != alpha {
+            try_step(disc, eps, x, best_alpha, ws);
+        }
+        x.copy_from_slice(&ws.x_try);
+        std::mem::swap(&mut ws.r, &mut ws.r_try);
+        std::mem::swap(&mut ws.k, &mut ws.k_try);
+        std::mem::swap(&mut ws.hist_trial, &mut ws.hist_try);
+        rnorm = best_norm;
+        iteration += 1;
+    }
+}
+
+/// Evaluates the system at `x + alpha dx` into the `*_try` buffers.
+fn try_step(disc: &Discretization, eps: &[f64; 3], x: &[f64], alpha: f64, ws: &mut Workspace) {
+    for ((t, xi), di) in ws.x_try.iter_mut().zip(x).zip(&ws.dx) {
+        *t = xi + alpha * di;
+    }
+    disc.evaluate(
+        &ws.x_try,
+        eps,
+        &ws.hist_base,
+        &mut ws.hist_try,
+        &mut ws.r_try,
+        Some(&mut ws.k_try),
+    );
+}
+
+/// Solves the RVE from the committed state to macro strain `eps`, writing the converged
+/// state into `trial` (resized like `committed`). The stress, and the tangent if asked,
+/// go to `stress`/`tangent`. `committed` is never modified.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_increment(
+    disc: &Discretization,
+    hom: &Homogenizer,
+    symbolic: &SymbolicLu<usize>,
+    settings: &SolverSpec,
+    committed: &State,
+    eps: [f64; 3],
+    request: TangentRequest,
+    ws: &mut Workspace,
+    trial: &mut State,
+    tangent: &mut [f64; 9],
+) -> Result<IncrementReport> {
+    trial.copy_from(committed);
+    let mut report = IncrementReport::default();
+    if disc.n() == 0 {
+        // Taylor: no fluctuation, no interface opening.
+        trial.strain = eps;
+        report.substeps = 1;
+        if request == TangentRequest::Consistent {
+            *tangent = hom.tangent(disc, &[]);
+        }
+        return Ok(report);
+    }
+    let start = committed.strain;
+    let delta = [eps[0] - start[0], eps[1] - start[1], eps[2] - start[2]];
+    let (mut done, mut step) = (0.0f64, 1.0f64);
+    let (mut depth, mut successes_in_row) = (0u32, 0u32);
+    while done < 1.0 {
+        let to = (done + step).min(1.0);
+        let target = if to >= 1.0 {
+            eps
+        } else {
+            [
+                start[0] + to * delta[0],
+                start[1] + to * delta[1],
+                start[2] + to * delta[2],
+            ]
+        };
+        ws.substep_start.copy_from(trial);
+        ws.hist_base.copy_from_slice(&trial.history);
+        match newton(disc, symbolic, settings, &target, &mut trial.unknowns, ws) {
+            Ok((iterations, factorizations)) => {
+                report.iterations += iterations;
+                report.factorizations += factorizations;
+                report.substeps += 1;
+                trial.history.copy_from_slice(&ws.hist_trial);
+                trial.strain = target;
+                done = to;
+                successes_in_row += 1;
+                if successes_in_row >= 2 && step < 1.0 {
+                    step *= 2.0;
+                    successes_in_row = 0;
+                }
+            }
+            Err(failure) => {
+                trial.copy_from(&ws.substep_start);
+                depth += 1;
+                successes_in_row = 0;
+                if depth > settings.max_substep_depth {
+                    let suggested = done.max(step).clamp(0.1, 0.5);
+                    return Err(Error::Solve {
+                        reason: failure.describe(settings.max_iterations),
+                        depth: depth - 1,
+                        suggested_step_ratio: suggested,
+                    });
+                }
+                step *= 0.5;
+            }
+        }
+    }
+    let counts = disc.evaluate(
+        &trial.unknowns,
+        &eps,
+        &ws.hist_base,
+        &mut ws.hist_try,
+        &mut ws.r_try,
+        None,
+    );
+    report.loading = counts.loading;
+    report.unloading = counts.unloading;
+    report.contact = counts.contact;
+    if request == TangentRequest::Consistent {
+        report.factorizations += condensed_tangent(disc, symbolic, ws)?;
+        *tangent = hom.tangent(disc, &ws.kg);
+    }
+    Ok(report)
+}
+
+/// Computes `ws.kg = K^-1 G` at the converged state (`ws.k`), reusing the last
+/// factorization when it can (see module docs). Returns the factorizations it did.
+fn condensed_tangent(
+    disc: &Discretization,
+    symbolic: &SymbolicLu<usize>,
+    ws: &mut Workspace,
+) -> Result<u32> {
+    let n = disc.n();
+    let fresh = |ws: &mut Workspace| -> Result<u32> {
+        factorize(
+            symbolic,
+            &disc.pattern.symbolic,
+            &ws.k,
+            &mut ws.lu,
+            MemStack::new(&mut ws.stack),
+        )
+        .map_err(|e| Error::Solve {
+            reason: format!("singular RVE tangent at the converged state ({e:?})"),
+            depth: 0,
+            suggested_step_ratio: 0.5,
+        })?;
+        ws.k_factored.copy_from_slice(&ws.k);
+        ws.factored = true;
+        ws.kg.copy_from_slice(&disc.g);
+        solve_in_place(
+            symbolic,
+            &ws.lu,
+            &mut ws.kg,
+            3,
+            MemStack::new(&mut ws.stack),
+        );
+        Ok(1)
+    };
+    if !ws.factored {
+        return fresh(ws);
+    }
+    ws.kg.copy_from_slice(&disc.g);
+    solve_in_place(
+        symbolic,
+        &ws.lu,
+        &mut ws.kg,
+        3,
+        MemStack::new(&mut ws.stack),
+    );
+    if ws.k == ws.k_factored {
+        return Ok(0);
+    }
+    // Iterative refinement against the converged K, watching the condensed term G^T X.
+    let g_norm = norm(&disc.g);
+    let condensed = |kg: &[f64]| -> [f64; 9] {
+        let mut out = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                out[3 * i + j] = disc.g[i * n..(i + 1) * n]
+                    .iter()
+                    .zip(&kg[j * n..(j + 1) * n])
+                    .map(|(a, b)| a * b)
+                    .sum();
+            }
+        }
+        out
+    };
+    let mut previous = condensed(&ws.kg);
+    let scale = previous
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        .max(1e-300);
+    for _ in 0..6 {
+        for c in 0..3 {
+            let (x, res) = (
+                &ws.kg[c * n..(c + 1) * n],
+                &mut ws.kg_res[c * n..(c + 1) * n],
+            );
+            disc.pattern.mul_vec(&ws.k, x, res);
+            for (ri, gi) in res.iter_mut().zip(&disc.g[c * n..(c + 1) * n]) {
+                *ri = gi - *ri;
+            }
+        }
+        if norm(&ws.kg_res) <= 1e-15 * g_norm {
+            return Ok(0);
+        }
+        solve_in_place(
+            symbolic,
+            &ws.lu,
+            &mut ws.kg_res,
+            3,
+            MemStack::new(&mut ws.stack),
+        );
+        ws.kg.iter_mut().zip(&ws.kg_res).for_each(|(x, d)| *x += d);
+        let now = condensed(&ws.kg);
+        let change = now
+            .iter()
+            .zip(&previous)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        previous = now;
+        if !change.is_finite() {
+            break;
+        }
+        if change <= 1e-13 * scale {
+            return Ok(0);
+        }
+    }
+    fresh(ws)
+}

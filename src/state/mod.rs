@@ -1,0 +1,7 @@
+//! Per-instance state and per-thread workspace.
+
+mod instance_state;
+mod workspace;
+
+pub use instance_state::State;
+pub use workspace::Workspace;

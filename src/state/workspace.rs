@@ -1,0 +1,79 @@
+//! Scratch memory for one thread: sized once for a model, reused by every update of every
+//! instance of that model, so the solve allocates nothing.
+
+use faer::dyn_stack::{MemBuffer, StackReq};
+use faer::sparse::linalg::lu::NumericLu;
+use faer::Par;
+
+use super::State;
+use crate::assembly::Discretization;
+use crate::interface::CohesiveHistory;
+
+/// Per-thread scratch for [`crate::model::Model::update`].
+pub struct Workspace {
+    /// Tangent values on the model's pattern, at the current iterate.
+    pub k: Vec<f64>,
+    /// Tangent values that `lu` factorizes (to detect an unchanged matrix).
+    pub k_factored: Vec<f64>,
+    /// True when `lu` holds a valid factorization of `k_factored`.
+    pub factored: bool,
+    pub lu: NumericLu<usize, f64>,
+    pub stack: MemBuffer,
+    /// Residual, Newton correction, line-search iterate, scratch.
+    pub r: Vec<f64>,
+    pub dx: Vec<f64>,
+    pub x_try: Vec<f64>,
+    pub r_try: Vec<f64>,
+    pub k_try: Vec<f64>,
+    /// `K^-1 G` (n x 3, column-major) and its refinement residual.
+    pub kg: Vec<f64>,
+    pub kg_res: Vec<f64>,
+    /// Interface histories: start of the sub-step, trial, line-search trial.
+    pub hist_base: Vec<CohesiveHistory>,
+    pub hist_trial: Vec<CohesiveHistory>,
+    pub hist_try: Vec<CohesiveHistory>,
+    /// State at the start of the current sub-step (for sub-stepping).
+    pub substep_start: State,
+    /// Residual norms of the last Newton loop (for convergence studies).
+    pub residuals: Vec<f64>,
+    /// Which model this workspace was sized for.
+    pub(crate) model_id: u64,
+}
+
+impl Workspace {
+    /// Sizes a workspace for `disc` (the model's discretization).
+    pub fn new(
+        disc: &Discretization,
+        symbolic: &faer::sparse::linalg::lu::SymbolicLu<usize>,
+        max_iterations: usize,
+        model_id: u64,
+    ) -> Self {
+        let n = disc.n();
+        let nh = disc.history_len();
+        let nnz = disc.pattern.nnz();
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(3, Par::Seq),
+        ]);
+        Workspace {
+            k: vec![0.0; nnz],
+            k_factored: vec![0.0; nnz],
+            factored: false,
+            lu: NumericLu::new(),
+            stack: MemBuffer::new(req),
+            r: vec![0.0; n],
+            dx: vec![0.0; n],
+            x_try: vec![0.0; n],
+            r_try: vec![0.0; n],
+            k_try: vec![0.0; nnz],
+            kg: vec![0.0; 3 * n],
+            kg_res: vec![0.0; 3 * n],
+            hist_base: vec![CohesiveHistory::default(); nh],
+            hist_trial: vec![CohesiveHistory::default(); nh],
+            hist_try: vec![CohesiveHistory::default(); nh],
+            substep_start: State::virgin(n, nh),
+            residuals: Vec::with_capacity(max_iterations + 2),
+            model_id,
+        }
+    }
+}
