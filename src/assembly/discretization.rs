@@ -16,7 +16,7 @@ use nalgebra::{Matrix3, SMatrix, SVector};
 
 use super::pattern::{Pattern, NO_SLOT};
 use crate::constraint::{DofMap, FIXED};
-use crate::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature};
+use crate::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature, TangentKind};
 use crate::error::Result;
 use crate::interface::{CohesiveHistory, CohesiveLaw};
 use crate::material::{Analysis, IsotropicElastic};
@@ -59,6 +59,9 @@ pub struct Discretization {
     pub g: Vec<f64>,
     /// Cell area `V_mu`.
     pub volume: f64,
+    /// Diagonal of the bulk stiffness (zero for multipliers): the metric of the relaxed
+    /// Newton's pseudo-time term.
+    pub mass: Vec<f64>,
 }
 
 /// Inputs of [`Discretization::new`] besides the mesh.
@@ -127,7 +130,17 @@ impl Discretization {
                 }
             }
         }
+        let mass = (0..n)
+            .map(|i| {
+                if i < dofs.n_reduced {
+                    k_const[pattern.diagonal_slots[i] as usize]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         Ok(Discretization {
+            mass,
             analysis: spec.analysis,
             dofs,
             bulk,
@@ -180,6 +193,22 @@ impl Discretization {
         r: &mut [f64],
         k: Option<&mut [f64]>,
     ) -> SystemEvaluation {
+        self.evaluate_with(x, eps, committed, trial, r, k, TangentKind::Consistent)
+    }
+
+    /// [`Discretization::evaluate`] with the interface matrix of choice (consistent or
+    /// secant, see [`TangentKind`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate_with(
+        &self,
+        x: &[f64],
+        eps: &[f64; 3],
+        committed: &[CohesiveHistory],
+        trial: &mut [CohesiveHistory],
+        r: &mut [f64],
+        k: Option<&mut [f64]>,
+        kind: TangentKind,
+    ) -> SystemEvaluation {
         // Linear part: K_const x + G eps.
         self.pattern.mul_vec(&self.k_const, x, r);
         let n = self.n();
@@ -202,13 +231,14 @@ impl Discretization {
         for (e, (geometry, dofs)) in self.interfaces.iter().zip(&self.interface_dofs).enumerate() {
             let u = Self::gather(x, dofs);
             let range = e * np..(e + 1) * np;
-            let resp = interface4::evaluate(
+            let resp = interface4::evaluate_with(
                 geometry,
                 self.quadrature,
                 law,
                 &committed[range.clone()],
                 &u,
                 &mut trial[range],
+                kind,
             );
             counts.loading += resp.loading;
             counts.unloading += resp.unloading;

@@ -22,6 +22,8 @@ pub struct Pattern {
     pub interface_slots: Vec<[u32; 64]>,
     /// Multiplier couplings: `(slot of (dof, multiplier), slot of (multiplier, dof), coefficient)`.
     pub constraint_slots: Vec<(u32, u32, f64)>,
+    /// Slot of each diagonal entry.
+    pub diagonal_slots: Vec<u32>,
 }
 
 fn pairs_of<const D: usize>(dofs: &[u32; D], out: &mut Vec<Pair<usize, usize>>) {
@@ -107,12 +109,14 @@ impl Pattern {
                 constraint_slots.push((slot(r, m), slot(m, r), w));
             }
         }
+        let diagonal_slots = (0..n as u32).map(|i| slot(i, i)).collect();
         Ok(Pattern {
             n,
             symbolic,
             triangle_slots,
             interface_slots,
             constraint_slots,
+            diagonal_slots,
         })
     }
 

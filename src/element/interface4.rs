@@ -226,6 +226,38 @@ pub fn evaluate(
     u: &SVector<f64, 8>,
     trial: &mut [CohesiveHistory],
 ) -> InterfaceResponse {
+    evaluate_with(
+        geometry,
+        quadrature,
+        law,
+        committed,
+        u,
+        trial,
+        TangentKind::Consistent,
+    )
+}
+
+/// Which matrix [`evaluate_with`] returns as `stiffness`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TangentKind {
+    /// `dF/du`, eqs. 41-47.
+    #[default]
+    Consistent,
+    /// The secant matrix of the law ([`CohesiveLaw::secant_matrix`]) in place of `dt/d delta`:
+    /// positive definite, with `F = K_secant u` exactly.
+    Secant,
+}
+
+/// [`evaluate`] with a choice of matrix.
+pub fn evaluate_with(
+    geometry: &InterfaceGeometry,
+    quadrature: InterfaceQuadrature,
+    law: &CohesiveLaw,
+    committed: &[CohesiveHistory],
+    u: &SVector<f64, 8>,
+    trial: &mut [CohesiveHistory],
+    kind: TangentKind,
+) -> InterfaceResponse {
     let rule = quadrature.rule();
     let (committed, trial) = (&committed[..rule.len()], &mut trial[..rule.len()]);
     debug_assert!(
@@ -254,7 +286,11 @@ pub fn evaluate(
         }
         let wl = w * half_l;
         let tg = r.transpose() * p.traction;
-        let cg = r.transpose() * p.tangent * r;
+        let c = match kind {
+            TangentKind::Consistent => p.tangent,
+            TangentKind::Secant => law.secant_matrix(&p),
+        };
+        let cg = r.transpose() * c * r;
         for (i, &ni) in shape.iter().enumerate() {
             let f = tg * (wl * ni);
             fb[2 * i] += f[0];

@@ -187,6 +187,20 @@ impl CohesiveLaw {
         (self.sigma_c / self.delta_c) * (1.0 - delta / self.delta_c).exp()
     }
 
+    /// The secant matrix `S` with `t = S delta` at a point evaluated by
+    /// [`CohesiveLaw::evaluate`]: on the loading branch `(t/delta) diag(beta^2, 1)` (the
+    /// secant of the envelope, eq. 21), elsewhere the consistent tangent (eqs. 46-47 are
+    /// already secant). Positive definite; used by the secant iterations of the solver.
+    pub fn secant_matrix(&self, point: &CohesivePoint) -> Matrix2<f64> {
+        match point.branch {
+            Branch::Loading => {
+                let k = self.loading_secant(point.opening);
+                Matrix2::new(k * self.beta * self.beta, 0.0, 0.0, k)
+            }
+            Branch::Unloading | Branch::Contact => point.tangent,
+        }
+    }
+
     /// Evaluates the law at a trial local jump `[delta_s, delta_n]` against the committed
     /// `history`; `length` is the element's reference length (used only by
     /// [`Penalty::PerLength`]). See the module documentation for the formulas and choices.

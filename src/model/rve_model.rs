@@ -135,7 +135,9 @@ impl Model {
         Workspace::new(
             &self.disc,
             &self.symbolic,
-            self.solver.max_iterations as usize,
+            self.solver
+                .max_iterations
+                .max(self.solver.max_secant_iterations) as usize,
             self.id,
         )
     }

@@ -309,6 +309,10 @@ pub struct SolverSpec {
     /// Maximum bisection depth of the macro strain increment (2^depth sub-steps).
     #[serde(default = "default_substep_depth")]
     pub max_substep_depth: u32,
+    /// Iterations allowed to the secant-then-Newton loop that takes over when plain
+    /// Newton fails on a step, before the step is bisected; 0 switches it off.
+    #[serde(default = "default_secant_iterations")]
+    pub max_secant_iterations: u32,
 }
 
 impl Default for SolverSpec {
@@ -318,6 +322,7 @@ impl Default for SolverSpec {
             max_iterations: default_iterations(),
             line_search: true,
             max_substep_depth: default_substep_depth(),
+            max_secant_iterations: default_secant_iterations(),
         }
     }
 }
@@ -353,8 +358,11 @@ fn default_tolerance() -> f64 {
     1e-6
 }
 fn default_iterations() -> u32 {
-    20
+    40
 }
 fn default_substep_depth() -> u32 {
-    6
+    10
+}
+fn default_secant_iterations() -> u32 {
+    100
 }

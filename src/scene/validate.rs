@@ -148,6 +148,12 @@ impl SceneSpec {
                 "must lie in 1..=1000",
             ));
         }
+        if s.max_secant_iterations > 10_000 {
+            return Err(Error::scene(
+                "solver.max_secant_iterations",
+                "must be at most 10000",
+            ));
+        }
         if s.max_substep_depth > 20 {
             return Err(Error::scene(
                 "solver.max_substep_depth",

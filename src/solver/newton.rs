@@ -12,6 +12,20 @@
 //! is taken (the smallest is still taken if none reduces it, so Newton can cross the kinks
 //! of the law). Switch off with `solver.line_search = false`.
 //!
+//! # Secant iterations, then Newton
+//! Past the peak, loading/unloading switches at many interface points can make Newton
+//! cycle (a semismooth Newton on the kinks of the law), and at an RVE snap-back the
+//! equilibrium jumps to another branch, far from the last converged state. When plain
+//! Newton fails on a step, the step is solved again from its start with secant
+//! iterations: the loading points use the secant `(t/delta) diag(beta^2, 1)` of the
+//! envelope instead of its tangent, so every matrix is positive definite and each iterate
+//! solves `K_sec(x_k) x_{k+1} = -G eps` (the classical secant / fixed-point iteration of
+//! damage mechanics, robust through softening and snap-back). Once the relative residual
+//! is below `100 * tolerance` the loop switches to consistent Newton for the final
+//! quadratic convergence (and back to secant if Newton makes the residual grow tenfold).
+//! Only if that fails too is the step bisected. The converged state satisfies the same
+//! equations; only the path to it differs.
+//!
 //! # Sub-stepping (Somer et al. 2009)
 //! If an increment fails (no convergence in `max_iterations`, a singular or non-finite
 //! system), it is bisected and the halves are solved in turn, each from the converged
@@ -35,6 +49,7 @@ use faer::sparse::linalg::lu::SymbolicLu;
 
 use super::linear::{factorize, solve_in_place};
 use crate::assembly::Discretization;
+use crate::element::TangentKind;
 use crate::error::{Error, Result};
 use crate::homogenization::Homogenizer;
 use crate::scene::SolverSpec;
@@ -104,9 +119,26 @@ fn reference(disc: &Discretization, eps: &[f64; 3]) -> f64 {
     sq.sqrt().max(1e-8 * g_frob)
 }
 
+/// How a Newton loop globalizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    /// Consistent Newton with backtracking line search.
+    Newton,
+    /// Secant iterations, switching to Newton near convergence (see module docs).
+    SecantThenNewton,
+}
+
+/// The full Newton step is taken unless it multiplies `||R||` by more than this; smaller
+/// steps are tried only then (a non-monotone rule: across the kinks of the cohesive law a
+/// temporary rise of the residual is normal, and strict decrease stalls Newton).
+const LINE_SEARCH_GROWTH: f64 = 1.0;
+/// Secant iterations hand over to Newton below this multiple of the tolerance.
+const SECANT_HANDOVER: f64 = 100.0;
+
 /// One Newton loop at fixed macro strain `eps` from the unknowns `x`, with interface
 /// history `ws.hist_base`. On success `x` is converged, `ws.r`/`ws.k`/`ws.hist_trial`
-/// belong to it, and `ws.lu` holds the last factorization (if any).
+/// belong to it (`ws.k` is the consistent tangent), and `ws.lu` holds the last
+/// factorization (if any).
 fn newton(
     disc: &Discretization,
     symbolic: &SymbolicLu<usize>,
@@ -114,31 +146,55 @@ fn newton(
     eps: &[f64; 3],
     x: &mut [f64],
     ws: &mut Workspace,
+    mode: Mode,
 ) -> std::result::Result<(u32, u32), Failure> {
     let reference = reference(disc, eps);
     let tolerance = settings.tolerance * reference;
+    let max_iterations = match mode {
+        Mode::Newton => settings.max_iterations,
+        Mode::SecantThenNewton => settings.max_secant_iterations,
+    };
+    let mut kind = match mode {
+        Mode::Newton => TangentKind::Consistent,
+        Mode::SecantThenNewton => TangentKind::Secant,
+    };
     ws.factored = false;
     ws.residuals.clear();
-    disc.evaluate(
+    disc.evaluate_with(
         x,
         eps,
         &ws.hist_base,
         &mut ws.hist_trial,
         &mut ws.r,
         Some(&mut ws.k),
+        kind,
     );
     let mut rnorm = norm(&ws.r);
     let mut factorizations = 0;
     let mut iteration = 0u32;
     loop {
-        ws.residuals.push(rnorm / reference);
+        if ws.residuals.len() < ws.residuals.capacity() {
+            ws.residuals.push(rnorm / reference);
+        }
         if !rnorm.is_finite() {
             return Err(Failure::NonFinite);
         }
         if rnorm <= tolerance {
+            if kind == TangentKind::Secant {
+                // Converged on secant matrices: the tangent needs the consistent one.
+                disc.evaluate(
+                    x,
+                    eps,
+                    &ws.hist_base,
+                    &mut ws.hist_trial,
+                    &mut ws.r,
+                    Some(&mut ws.k),
+                );
+                ws.factored = false;
+            }
             return Ok((iteration, factorizations));
         }
-        if iteration >= settings.max_iterations {
+        if iteration >= max_iterations {
             return Err(Failure::NotConverged {
                 residual: rnorm,
                 reference,
@@ -149,7 +205,7 @@ fn newton(
             .map_err(|e| Failure::Singular(format!("{e:?}")))?;
         factorizations += 1;
         ws.k_factored.copy_from_slice(&ws.k);
-        ws.factored = true;
+        ws.factored = kind == TangentKind::Consistent;
         ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
         solve_in_place(
             symbolic,
@@ -161,47 +217,100 @@ fn newton(
         if ws.dx.iter().any(|d| !d.is_finite()) {
             return Err(Failure::Singular("non-finite Newton correction".into()));
         }
+        iteration += 1;
 
-        // Line search on ||R||: try alpha = 1, 1/2, ..., 1/32; keep the best.
-        let mut alpha = 1.0;
-        let (mut best_alpha, mut best_norm) = (1.0, f64::INFINITY);
-        let halvings = if settings.line_search { 5 } else { 0 };
-        for trial in 0..=halvings {
-            try_step(disc, eps, x, alpha, ws);
-            let n_try = norm(&ws.r_try);
-            if n_try < best_norm {
-                best_norm = n_try;
-                best_alpha = alpha;
-            }
-            if n_try < rnorm || trial == halvings {
-                break;
-            }
-            alpha *= 0.5;
-        }
-        if best_alpha != alpha {
-            try_step(disc, eps, x, best_alpha, ws);
-        }
+        // The matrix of the next iterate: secant until the hand-over, then consistent.
+        let next_kind = match mode {
+            Mode::Newton => TangentKind::Consistent,
+            Mode::SecantThenNewton => kind,
+        };
+        let new_norm = if kind == TangentKind::Consistent {
+            line_search(disc, eps, x, rnorm, settings.line_search, next_kind, ws)
+        } else {
+            try_step(disc, eps, x, 1.0, next_kind, ws);
+            norm(&ws.r_try)
+        };
         x.copy_from_slice(&ws.x_try);
         std::mem::swap(&mut ws.r, &mut ws.r_try);
         std::mem::swap(&mut ws.k, &mut ws.k_try);
         std::mem::swap(&mut ws.hist_trial, &mut ws.hist_try);
-        rnorm = best_norm;
-        iteration += 1;
+        if mode == Mode::SecantThenNewton {
+            let wanted = if new_norm <= SECANT_HANDOVER * tolerance {
+                TangentKind::Consistent
+            } else if kind == TangentKind::Consistent && new_norm > 10.0 * rnorm {
+                TangentKind::Secant
+            } else {
+                kind
+            };
+            if wanted != kind {
+                kind = wanted;
+                disc.evaluate_with(
+                    x,
+                    eps,
+                    &ws.hist_base,
+                    &mut ws.hist_trial,
+                    &mut ws.r,
+                    Some(&mut ws.k),
+                    kind,
+                );
+            }
+        }
+        rnorm = new_norm;
     }
 }
 
+/// Backtracking on `||R||` along `ws.dx`: `alpha = 1, 1/2, ..., 1/32`, keeping the best;
+/// leaves the chosen iterate in the `*_try` buffers and returns its residual norm.
+fn line_search(
+    disc: &Discretization,
+    eps: &[f64; 3],
+    x: &[f64],
+    rnorm: f64,
+    enabled: bool,
+    kind: TangentKind,
+    ws: &mut Workspace,
+) -> f64 {
+    let mut alpha = 1.0;
+    let (mut best_alpha, mut best_norm) = (1.0, f64::INFINITY);
+    let halvings = if enabled { 5 } else { 0 };
+    for trial in 0..=halvings {
+        try_step(disc, eps, x, alpha, kind, ws);
+        let n_try = norm(&ws.r_try);
+        if n_try < best_norm {
+            best_norm = n_try;
+            best_alpha = alpha;
+        }
+        if n_try < LINE_SEARCH_GROWTH * rnorm || trial == halvings {
+            break;
+        }
+        alpha *= 0.5;
+    }
+    if best_alpha != alpha {
+        try_step(disc, eps, x, best_alpha, kind, ws);
+    }
+    best_norm
+}
+
 /// Evaluates the system at `x + alpha dx` into the `*_try` buffers.
-fn try_step(disc: &Discretization, eps: &[f64; 3], x: &[f64], alpha: f64, ws: &mut Workspace) {
+fn try_step(
+    disc: &Discretization,
+    eps: &[f64; 3],
+    x: &[f64],
+    alpha: f64,
+    kind: TangentKind,
+    ws: &mut Workspace,
+) {
     for ((t, xi), di) in ws.x_try.iter_mut().zip(x).zip(&ws.dx) {
         *t = xi + alpha * di;
     }
-    disc.evaluate(
+    disc.evaluate_with(
         &ws.x_try,
         eps,
         &ws.hist_base,
         &mut ws.hist_try,
         &mut ws.r_try,
         Some(&mut ws.k_try),
+        kind,
     );
 }
 
@@ -249,7 +358,30 @@ pub fn solve_increment(
         };
         ws.substep_start.copy_from(trial);
         ws.hist_base.copy_from_slice(&trial.history);
-        match newton(disc, symbolic, settings, &target, &mut trial.unknowns, ws) {
+        let mut outcome = newton(
+            disc,
+            symbolic,
+            settings,
+            &target,
+            &mut trial.unknowns,
+            ws,
+            Mode::Newton,
+        );
+        if outcome.is_err() && settings.max_secant_iterations > 0 {
+            report.iterations += ws.residuals.len().saturating_sub(1) as u32;
+            trial.copy_from(&ws.substep_start);
+            ws.hist_base.copy_from_slice(&trial.history);
+            outcome = newton(
+                disc,
+                symbolic,
+                settings,
+                &target,
+                &mut trial.unknowns,
+                ws,
+                Mode::SecantThenNewton,
+            );
+        }
+        match outcome {
             Ok((iterations, factorizations)) => {
                 report.iterations += iterations;
                 report.factorizations += factorizations;
