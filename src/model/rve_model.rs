@@ -3,15 +3,14 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use faer::sparse::linalg::lu::SymbolicLu;
-
 use crate::assembly::{Discretization, DiscretizationSpec};
 use crate::error::{Error, Result};
 use crate::homogenization::Homogenizer;
 use crate::interface::{CohesiveLaw, Penalty};
 use crate::mesh::{build_microstructure, Mesh, Microstructure};
+use crate::scene::BoundaryKind;
 use crate::scene::{Scene, SolverSpec};
-use crate::solver::{solve_increment, symbolic_lu, IncrementReport, TangentRequest};
+use crate::solver::{solve_increment, IncrementReport, LinearSolver, TangentRequest};
 use crate::state::{State, Workspace};
 
 /// Largest strain component accepted; beyond it a small-strain RVE makes no sense.
@@ -38,7 +37,8 @@ pub struct Model {
     pub microstructure: Microstructure,
     pub disc: Discretization,
     pub hom: Homogenizer,
-    pub symbolic: SymbolicLu<usize>,
+    /// Symbolic LL^T and LU analyses of the pattern.
+    pub linear: LinearSolver,
     pub solver: SolverSpec,
     /// Homogenized tangent of the virgin RVE (row-major).
     pub elastic_tangent: [f64; 9],
@@ -99,14 +99,15 @@ impl Model {
             },
         )?;
         let hom = Homogenizer::new(&disc);
-        let symbolic = symbolic_lu(&disc.pattern.symbolic)?;
+        let spd_possible = spec.boundary.kind != BoundaryKind::Minimal;
+        let linear = LinearSolver::new(&disc.pattern.symbolic, spd_possible)?;
         let mut model = Model {
             id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
             scene: scene.clone(),
             microstructure,
             disc,
             hom,
-            symbolic,
+            linear,
             solver: spec.solver,
             elastic_tangent: [0.0; 9],
         };
@@ -134,7 +135,7 @@ impl Model {
     pub fn workspace(&self) -> Workspace {
         Workspace::new(
             &self.disc,
-            &self.symbolic,
+            &self.linear,
             self.solver
                 .max_iterations
                 .max(self.solver.max_secant_iterations) as usize,
@@ -178,7 +179,7 @@ impl Model {
         let report = solve_increment(
             &self.disc,
             &self.hom,
-            &self.symbolic,
+            &self.linear,
             &self.solver,
             committed,
             strain,

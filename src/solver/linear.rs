@@ -1,51 +1,152 @@
-//! Sparse LU with partial pivoting (faer), symbolic analysis once per model.
+//! Sparse direct solves with faer: Cholesky (LL^T) first, LU with partial pivoting as the
+//! fallback. Symbolic analyses once per model; numeric factors in reusable buffers.
 //!
-//! Why LU: after the peak of the cohesive law the RVE tangent is symmetric but indefinite,
-//! and the minimal BC adds a saddle point. faer's LBL^T pivots only in its supernodal
-//! variant and can return NaN silently on small simplicial problems (see TOOLCHAIN.md);
-//! LU with partial pivoting is robust for all four BCs. The numeric factorization writes
-//! into a reusable `NumericLu` and a preallocated stack: no allocation per iteration once
-//! the buffers have grown to their size (first call).
+//! Why this pair: before the peak of the cohesive law, on unloading and in contact, the
+//! RVE tangent is symmetric positive definite, and LL^T is 4-8 times faster than LU here
+//! (see TOOLCHAIN.md). After the peak the tangent can be indefinite and the minimal BC is
+//! a saddle point. faer's LL^T *reports* a non-positive pivot (`LltError`), so a failed
+//! LL^T is a reliable signal to switch to LU, which is robust for any regular matrix. The
+//! LBL^T variant is avoided: it pivots only when supernodal and can return NaN silently
+//! on small simplicial problems. The numeric factorizations write into buffers that keep
+//! their size between calls: no allocation per iteration once they have grown (first call).
 
-use faer::dyn_stack::MemStack;
+use faer::dyn_stack::{MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
+};
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
-use faer::sparse::linalg::LuError;
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Par};
+use faer::{Conj, MatMut, Par, Side};
 
 use crate::error::{Error, Result};
 
-/// Symbolic LU analysis (COLAMD ordering) of the pattern: once per model.
-pub fn symbolic_lu(pattern: &SymbolicSparseColMat<usize>) -> Result<SymbolicLu<usize>> {
-    factorize_symbolic_lu(pattern.as_ref(), Default::default())
-        .map_err(|e| Error::Mesh(format!("symbolic LU analysis failed: {e:?}")))
+/// Which factorization a [`NumericFactor`] holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FactorKind {
+    Cholesky,
+    Lu,
 }
 
-/// Numeric LU of the matrix with `values` on `pattern`, into `numeric`.
-pub fn factorize(
-    symbolic: &SymbolicLu<usize>,
-    pattern: &SymbolicSparseColMat<usize>,
-    values: &[f64],
-    numeric: &mut NumericLu<usize, f64>,
-    stack: &mut MemStack,
-) -> std::result::Result<(), LuError> {
-    let a = SparseColMatRef::new(pattern.as_ref(), values);
-    symbolic
-        .factorize_numeric_lu(numeric, a, Par::Seq, stack, Default::default())
-        .map(|_| ())
+/// Numeric factors, per workspace.
+pub struct NumericFactor {
+    lu: NumericLu<usize, f64>,
+    l_values: Vec<f64>,
+    /// What the last successful factorization was, if any.
+    pub current: Option<FactorKind>,
 }
 
-/// Solves `A X = B` in place for `ncols` right-hand sides stored column-major in `rhs`,
-/// with the factorization last written by [`factorize`].
-pub fn solve_in_place(
-    symbolic: &SymbolicLu<usize>,
-    numeric: &NumericLu<usize, f64>,
-    rhs: &mut [f64],
-    ncols: usize,
-    stack: &mut MemStack,
-) {
-    let n = rhs.len() / ncols;
-    let lu = LuRef::new_unchecked(symbolic, numeric);
-    let b = MatMut::from_column_major_slice_mut(rhs, n, ncols);
-    lu.solve_in_place_with_conj(Conj::No, b, Par::Seq, stack);
+/// Symbolic analyses of one pattern, shared by every instance of a model.
+pub struct LinearSolver {
+    lu: SymbolicLu<usize>,
+    /// `None` when the system can never be positive definite (minimal BC multipliers).
+    cholesky: Option<SymbolicCholesky<usize>>,
+}
+
+impl LinearSolver {
+    /// Analyses `pattern` (COLAMD for LU, AMD for LL^T). `spd_possible` is false for
+    /// saddle-point systems.
+    pub fn new(pattern: &SymbolicSparseColMat<usize>, spd_possible: bool) -> Result<Self> {
+        let lu = factorize_symbolic_lu(pattern.as_ref(), Default::default())
+            .map_err(|e| Error::Mesh(format!("symbolic LU analysis failed: {e:?}")))?;
+        let cholesky = if spd_possible && pattern.nrows() > 0 {
+            Some(
+                factorize_symbolic_cholesky(
+                    pattern.as_ref(),
+                    Side::Lower,
+                    SymmetricOrdering::Amd,
+                    CholeskySymbolicParams {
+                        // Measured (benches/solver.rs): supernodal is 2x faster than
+                        // simplicial already at 722 unknowns, and faster at 9k.
+                        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+                        ..Default::default()
+                    },
+                )
+                .map_err(|e| Error::Mesh(format!("symbolic Cholesky analysis failed: {e:?}")))?,
+            )
+        } else {
+            None
+        };
+        Ok(LinearSolver { lu, cholesky })
+    }
+
+    /// Empty numeric buffers for this solver.
+    pub fn numeric(&self) -> NumericFactor {
+        NumericFactor {
+            lu: NumericLu::new(),
+            l_values: vec![0.0; self.cholesky.as_ref().map_or(0, |c| c.len_val())],
+            current: None,
+        }
+    }
+
+    /// Scratch memory for a factorization and a solve with `ncols` right-hand sides.
+    pub fn scratch(&self, ncols: usize) -> StackReq {
+        let mut reqs = vec![
+            self.lu
+                .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+            self.lu.solve_in_place_scratch::<f64>(ncols, Par::Seq),
+        ];
+        if let Some(c) = &self.cholesky {
+            reqs.push(c.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
+            reqs.push(c.solve_in_place_scratch::<f64>(ncols, Par::Seq));
+        }
+        StackReq::any_of(&reqs)
+    }
+
+    /// Factorizes the matrix with `values` on `pattern`: LL^T when `try_cholesky` and the
+    /// matrix is positive definite, else LU. Returns the kind used.
+    pub fn factorize(
+        &self,
+        pattern: &SymbolicSparseColMat<usize>,
+        values: &[f64],
+        numeric: &mut NumericFactor,
+        try_cholesky: bool,
+        stack: &mut MemStack,
+    ) -> std::result::Result<FactorKind, String> {
+        numeric.current = None;
+        let a = SparseColMatRef::new(pattern.as_ref(), values);
+        if let (true, Some(c)) = (try_cholesky, &self.cholesky) {
+            let ok = c
+                .factorize_numeric_llt(
+                    &mut numeric.l_values,
+                    a,
+                    Side::Lower,
+                    Default::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                )
+                .is_ok();
+            if ok {
+                numeric.current = Some(FactorKind::Cholesky);
+                return Ok(FactorKind::Cholesky);
+            }
+        }
+        self.lu
+            .factorize_numeric_lu(&mut numeric.lu, a, Par::Seq, stack, Default::default())
+            .map_err(|e| format!("{e:?}"))?;
+        numeric.current = Some(FactorKind::Lu);
+        Ok(FactorKind::Lu)
+    }
+
+    /// Solves in place for `ncols` right-hand sides stored column-major in `rhs`, with the
+    /// last factorization. Does nothing if there is none (callers check `current`).
+    pub fn solve_in_place(
+        &self,
+        numeric: &NumericFactor,
+        rhs: &mut [f64],
+        ncols: usize,
+        stack: &mut MemStack,
+    ) {
+        let n = rhs.len() / ncols.max(1);
+        let b = MatMut::from_column_major_slice_mut(rhs, n, ncols);
+        match (numeric.current, &self.cholesky) {
+            (Some(FactorKind::Cholesky), Some(c)) => LltRef::new(c, &numeric.l_values)
+                .solve_in_place_with_conj(Conj::No, b, Par::Seq, stack),
+            (Some(FactorKind::Lu), _) => LuRef::new_unchecked(&self.lu, &numeric.lu)
+                .solve_in_place_with_conj(Conj::No, b, Par::Seq, stack),
+            _ => {}
+        }
+    }
 }

@@ -4,5 +4,5 @@
 mod linear;
 mod newton;
 
-pub use linear::{factorize, solve_in_place, symbolic_lu};
+pub use linear::{FactorKind, LinearSolver, NumericFactor};
 pub use newton::{solve_increment, IncrementReport, TangentRequest};

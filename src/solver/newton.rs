@@ -45,9 +45,8 @@
 //! With sub-steps, the tangent is that of the last sub-step.
 
 use faer::dyn_stack::MemStack;
-use faer::sparse::linalg::lu::SymbolicLu;
 
-use super::linear::{factorize, solve_in_place};
+use super::linear::LinearSolver;
 use crate::assembly::Discretization;
 use crate::element::TangentKind;
 use crate::error::{Error, Result};
@@ -137,11 +136,11 @@ const SECANT_HANDOVER: f64 = 100.0;
 
 /// One Newton loop at fixed macro strain `eps` from the unknowns `x`, with interface
 /// history `ws.hist_base`. On success `x` is converged, `ws.r`/`ws.k`/`ws.hist_trial`
-/// belong to it (`ws.k` is the consistent tangent), and `ws.lu` holds the last
+/// belong to it (`ws.k` is the consistent tangent), and `ws.factor` holds the last
 /// factorization (if any).
 fn newton(
     disc: &Discretization,
-    symbolic: &SymbolicLu<usize>,
+    linear: &LinearSolver,
     settings: &SolverSpec,
     eps: &[f64; 3],
     x: &mut [f64],
@@ -201,19 +200,14 @@ fn newton(
             });
         }
         let stack = MemStack::new(&mut ws.stack);
-        factorize(symbolic, &disc.pattern.symbolic, &ws.k, &mut ws.lu, stack)
-            .map_err(|e| Failure::Singular(format!("{e:?}")))?;
+        linear
+            .factorize(&disc.pattern.symbolic, &ws.k, &mut ws.factor, true, stack)
+            .map_err(Failure::Singular)?;
         factorizations += 1;
         ws.k_factored.copy_from_slice(&ws.k);
         ws.factored = kind == TangentKind::Consistent;
         ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
-        solve_in_place(
-            symbolic,
-            &ws.lu,
-            &mut ws.dx,
-            1,
-            MemStack::new(&mut ws.stack),
-        );
+        linear.solve_in_place(&ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
         if ws.dx.iter().any(|d| !d.is_finite()) {
             return Err(Failure::Singular("non-finite Newton correction".into()));
         }
@@ -321,7 +315,7 @@ fn try_step(
 pub fn solve_increment(
     disc: &Discretization,
     hom: &Homogenizer,
-    symbolic: &SymbolicLu<usize>,
+    linear: &LinearSolver,
     settings: &SolverSpec,
     committed: &State,
     eps: [f64; 3],
@@ -360,7 +354,7 @@ pub fn solve_increment(
         ws.hist_base.copy_from_slice(&trial.history);
         let mut outcome = newton(
             disc,
-            symbolic,
+            linear,
             settings,
             &target,
             &mut trial.unknowns,
@@ -373,7 +367,7 @@ pub fn solve_increment(
             ws.hist_base.copy_from_slice(&trial.history);
             outcome = newton(
                 disc,
-                symbolic,
+                linear,
                 settings,
                 &target,
                 &mut trial.unknowns,
@@ -423,7 +417,7 @@ pub fn solve_increment(
     report.unloading = counts.unloading;
     report.contact = counts.contact;
     if request == TangentRequest::Consistent {
-        report.factorizations += condensed_tangent(disc, symbolic, ws)?;
+        report.factorizations += condensed_tangent(disc, linear, ws)?;
         *tangent = hom.tangent(disc, &ws.kg);
     }
     Ok(report)
@@ -433,46 +427,35 @@ pub fn solve_increment(
 /// factorization when it can (see module docs). Returns the factorizations it did.
 fn condensed_tangent(
     disc: &Discretization,
-    symbolic: &SymbolicLu<usize>,
+    linear: &LinearSolver,
     ws: &mut Workspace,
 ) -> Result<u32> {
     let n = disc.n();
     let fresh = |ws: &mut Workspace| -> Result<u32> {
-        factorize(
-            symbolic,
-            &disc.pattern.symbolic,
-            &ws.k,
-            &mut ws.lu,
-            MemStack::new(&mut ws.stack),
-        )
-        .map_err(|e| Error::Solve {
-            reason: format!("singular RVE tangent at the converged state ({e:?})"),
-            depth: 0,
-            suggested_step_ratio: 0.5,
-        })?;
+        linear
+            .factorize(
+                &disc.pattern.symbolic,
+                &ws.k,
+                &mut ws.factor,
+                true,
+                MemStack::new(&mut ws.stack),
+            )
+            .map_err(|e| Error::Solve {
+                reason: format!("singular RVE tangent at the converged state ({e:?})"),
+                depth: 0,
+                suggested_step_ratio: 0.5,
+            })?;
         ws.k_factored.copy_from_slice(&ws.k);
         ws.factored = true;
         ws.kg.copy_from_slice(&disc.g);
-        solve_in_place(
-            symbolic,
-            &ws.lu,
-            &mut ws.kg,
-            3,
-            MemStack::new(&mut ws.stack),
-        );
+        linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
         Ok(1)
     };
     if !ws.factored {
         return fresh(ws);
     }
     ws.kg.copy_from_slice(&disc.g);
-    solve_in_place(
-        symbolic,
-        &ws.lu,
-        &mut ws.kg,
-        3,
-        MemStack::new(&mut ws.stack),
-    );
+    linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
     if ws.k == ws.k_factored {
         return Ok(0);
     }
@@ -510,13 +493,7 @@ fn condensed_tangent(
         if norm(&ws.kg_res) <= 1e-15 * g_norm {
             return Ok(0);
         }
-        solve_in_place(
-            symbolic,
-            &ws.lu,
-            &mut ws.kg_res,
-            3,
-            MemStack::new(&mut ws.stack),
-        );
+        linear.solve_in_place(&ws.factor, &mut ws.kg_res, 3, MemStack::new(&mut ws.stack));
         ws.kg.iter_mut().zip(&ws.kg_res).for_each(|(x, d)| *x += d);
         let now = condensed(&ws.kg);
         let change = now

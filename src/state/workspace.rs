@@ -1,23 +1,22 @@
 //! Scratch memory for one thread: sized once for a model, reused by every update of every
 //! instance of that model, so the solve allocates nothing.
 
-use faer::dyn_stack::{MemBuffer, StackReq};
-use faer::sparse::linalg::lu::NumericLu;
-use faer::Par;
+use faer::dyn_stack::MemBuffer;
 
 use super::State;
 use crate::assembly::Discretization;
 use crate::interface::CohesiveHistory;
+use crate::solver::{LinearSolver, NumericFactor};
 
 /// Per-thread scratch for [`crate::model::Model::update`].
 pub struct Workspace {
     /// Tangent values on the model's pattern, at the current iterate.
     pub k: Vec<f64>,
-    /// Tangent values that `lu` factorizes (to detect an unchanged matrix).
+    /// Tangent values that `factor` factorizes (to detect an unchanged matrix).
     pub k_factored: Vec<f64>,
-    /// True when `lu` holds a valid factorization of `k_factored`.
+    /// True when `factor` holds a valid factorization of `k_factored`.
     pub factored: bool,
-    pub lu: NumericLu<usize, f64>,
+    pub factor: NumericFactor,
     pub stack: MemBuffer,
     /// Residual, Newton correction, line-search iterate, scratch.
     pub r: Vec<f64>,
@@ -44,22 +43,19 @@ impl Workspace {
     /// Sizes a workspace for `disc` (the model's discretization).
     pub fn new(
         disc: &Discretization,
-        symbolic: &faer::sparse::linalg::lu::SymbolicLu<usize>,
+        linear: &LinearSolver,
         max_iterations: usize,
         model_id: u64,
     ) -> Self {
         let n = disc.n();
         let nh = disc.history_len();
         let nnz = disc.pattern.nnz();
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(3, Par::Seq),
-        ]);
+        let req = linear.scratch(3);
         Workspace {
             k: vec![0.0; nnz],
             k_factored: vec![0.0; nnz],
             factored: false,
-            lu: NumericLu::new(),
+            factor: linear.numeric(),
             stack: MemBuffer::new(req),
             r: vec![0.0; n],
             dx: vec![0.0; n],

@@ -1,0 +1,159 @@
+//! Solver benchmark: `cargo bench --bench solver` prints one table row per RVE.
+//!
+//! For each scene, on one core: the median time of a converged increment along the
+//! section 5.2.1 path (`eps_xx` to 2.2e-4 in 20 increments), the iterations per increment,
+//! the median numeric factorization of the converged tangent as the solver does it (LL^T,
+//! LU when that fails) and LU alone for comparison, the 1-RHS solve time, the
+//! bytes of one instance's state, and the ratio
+//! `update time / (iterations x factorization + solve)` per increment (median), which says
+//! how much an update costs beyond its unavoidable linear algebra.
+//!
+//! Timing tests do not belong in the test suite (noisy machines); this is the place.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use faer::dyn_stack::MemStack;
+use rve::solver::FactorKind;
+use rve::{Instance, Model, Scene, TangentRequest};
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+struct Row {
+    name: String,
+    unknowns: usize,
+    itz: usize,
+    increment_ms: f64,
+    iterations: f64,
+    max_iterations: u32,
+    factor_ms: f64,
+    lu_ms: f64,
+    cholesky_share: f64,
+    solve_ms: f64,
+    state_bytes: usize,
+    ratio: f64,
+}
+
+fn bench(path: &str) -> Row {
+    let scene = Scene::from_file(path).expect("scene");
+    let model = Arc::new(Model::from_scene(&scene).expect("model"));
+    let mut ws = model.workspace();
+    let steps = 20;
+    let mut times = Vec::new();
+    let mut iterations = Vec::new();
+    let mut ratios = Vec::new();
+    let mut factor_times = Vec::new();
+    let mut solve_times = Vec::new();
+    let mut max_iterations = 0;
+    let mut lu_times = Vec::new();
+    let mut cholesky_count = 0usize;
+    // Repeat the path to get stable medians.
+    for _ in 0..3 {
+        let mut inst = Instance::new(model.clone());
+        for k in 1..=steps {
+            let eps = [2.2e-4 * k as f64 / steps as f64, 0.0, 0.0];
+            let t0 = Instant::now();
+            let r = inst
+                .update(eps, &mut ws, TangentRequest::Consistent)
+                .expect("update");
+            let dt = t0.elapsed().as_secs_f64();
+            inst.commit().expect("commit");
+            // Factorization and solve of the converged tangent, timed on their own.
+            let (mut ft, mut st, mut lt) = (Vec::new(), Vec::new(), Vec::new());
+            for _ in 0..5 {
+                let t = Instant::now();
+                let kind = model
+                    .linear
+                    .factorize(
+                        &model.disc.pattern.symbolic,
+                        &ws.k,
+                        &mut ws.factor,
+                        true,
+                        MemStack::new(&mut ws.stack),
+                    )
+                    .expect("factorization");
+                ft.push(t.elapsed().as_secs_f64());
+                if kind == FactorKind::Cholesky {
+                    cholesky_count += 1;
+                }
+                ws.dx.copy_from_slice(&ws.r);
+                let t = Instant::now();
+                model.linear.solve_in_place(
+                    &ws.factor,
+                    &mut ws.dx,
+                    1,
+                    MemStack::new(&mut ws.stack),
+                );
+                st.push(t.elapsed().as_secs_f64());
+                let t = Instant::now();
+                model
+                    .linear
+                    .factorize(
+                        &model.disc.pattern.symbolic,
+                        &ws.k,
+                        &mut ws.factor,
+                        false,
+                        MemStack::new(&mut ws.stack),
+                    )
+                    .expect("lu");
+                lt.push(t.elapsed().as_secs_f64());
+            }
+            let (f, s) = (median(&mut ft), median(&mut st));
+            factor_times.push(f);
+            solve_times.push(s);
+            lu_times.push(median(&mut lt));
+            times.push(dt);
+            iterations.push(r.report.iterations as f64);
+            max_iterations = max_iterations.max(r.report.iterations);
+            ratios.push(dt / (r.report.iterations.max(1) as f64 * f + s));
+        }
+    }
+    let inst = Instance::new(model.clone());
+    Row {
+        name: path.rsplit('/').next().unwrap_or(path).to_string(),
+        unknowns: model.disc.n(),
+        itz: model.disc.interfaces.len(),
+        increment_ms: 1e3 * median(&mut times),
+        iterations: median(&mut iterations),
+        max_iterations,
+        cholesky_share: cholesky_count as f64 / (5 * factor_times.len()) as f64,
+        factor_ms: 1e3 * median(&mut factor_times),
+        lu_ms: 1e3 * median(&mut lu_times),
+        solve_ms: 1e3 * median(&mut solve_times),
+        state_bytes: inst.committed().bytes(),
+        ratio: median(&mut ratios),
+    }
+}
+
+fn main() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let scenes = [
+        format!("{root}/scenes/paper_rve.toml"),
+        format!("{root}/scenes/paper_rve_fine.toml"),
+    ];
+    println!(
+        "| scene | unknowns | ITZ | median increment (ms) | iterations (median / max) | factorization used (ms) | LL^T share | LU alone (ms) | solve (ms) | state bytes | update / (it x fact + solve) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    for s in &scenes {
+        let r = bench(s);
+        println!(
+            "| {} | {} | {} | {:.3} | {} / {} | {:.3} | {:.0} % | {:.3} | {:.3} | {} | {:.2} |",
+            r.name,
+            r.unknowns,
+            r.itz,
+            r.increment_ms,
+            r.iterations,
+            r.max_iterations,
+            r.factor_ms,
+            100.0 * r.cholesky_share,
+            r.lu_ms,
+            r.solve_ms,
+            r.state_bytes,
+            r.ratio
+        );
+    }
+}
