@@ -105,3 +105,87 @@ fn bad_scene_exits_nonzero_with_the_key_in_the_message() {
     assert!(err.contains("materials.itz.delta_c"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Parses `response.csv` into (header, rows).
+fn read_csv(path: &std::path::Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+#[test]
+fn run_follows_the_unilateral_cycle_and_writes_the_csv() {
+    let dir = std::env::temp_dir().join(format!("rve-run-{}", std::process::id()));
+    let scene = common::repo("scenes/paper_rve_cycle.toml");
+    let out = rve(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (header, rows) = read_csv(&dir.join("response.csv"));
+    let expected = [
+        "step",
+        "eps_xx",
+        "eps_yy",
+        "gamma_xy",
+        "sig_xx",
+        "sig_yy",
+        "sig_xy",
+        "D11",
+        "D12",
+        "D13",
+        "D21",
+        "D22",
+        "D23",
+        "D31",
+        "D32",
+        "D33",
+        "iterations",
+        "substeps",
+    ];
+    assert_eq!(&header[..expected.len()], &expected.map(String::from)[..]);
+    assert_eq!(rows.len(), 60, "section 5.2.2 has 60 increments");
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (eps, sig, d11) = (col("eps_xx"), col("sig_xx"), col("D11"));
+    // The path: up to 2.3e-4 at increment 20, then down to -4.5e-4.
+    assert_eq!(rows[19][eps], 2.3e-4);
+    assert_eq!(rows[59][eps], -4.5e-4);
+    // Unilateral effect: the unloading stiffness (damaged, secant to the origin) is well
+    // below the virgin one, and closure in compression recovers it.
+    let virgin = rows[0][d11];
+    let unloading = rows[25][d11];
+    let compression = rows[50][d11];
+    assert!(
+        unloading < 0.8 * virgin,
+        "unloading {unloading} vs virgin {virgin}"
+    );
+    assert!(
+        compression > 0.95 * virgin,
+        "compression {compression} vs virgin {virgin}"
+    );
+    // Secant unloading passes through the origin: stress and strain shrink together.
+    let (e25, s25) = (rows[25][eps], rows[25][sig]);
+    let (e30, s30) = (rows[30][eps], rows[30][sig]);
+    assert!(
+        (s25 / e25 - s30 / e30).abs() < 1e-6 * (s25 / e25),
+        "unloading is not secant"
+    );
+    assert!(rows[59][sig] < 0.0);
+    std::fs::remove_dir_all(&dir).ok();
+}
