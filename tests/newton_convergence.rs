@@ -73,8 +73,8 @@ fn section_5_2_2_cycle_iterations() {
         "slow increments {peak:?}"
     );
     // Unloading is linear (secant to the origin): one iteration, no sub-steps.
-    for k in 22..32 {
-        assert_eq!((steps[k].0, steps[k].1), (1, 1), "unloading step {}", k + 1);
+    for (k, step) in steps.iter().enumerate().take(32).skip(22) {
+        assert_eq!((step.0, step.1), (1, 1), "unloading step {}", k + 1);
     }
     // Closure and compression: at most 4 iterations, quadratic.
     for (k, (it, _, res)) in steps.iter().enumerate().skip(32) {

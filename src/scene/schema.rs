@@ -309,6 +309,10 @@ pub struct SolverSpec {
     /// Maximum bisection depth of the macro strain increment (2^depth sub-steps).
     #[serde(default = "default_substep_depth")]
     pub max_substep_depth: u32,
+    /// Trace the equilibrium path through limit points (arc length) when Newton fails on
+    /// a step, before the secant iterations and bisection.
+    #[serde(default = "yes")]
+    pub path_following: bool,
     /// Iterations allowed to the secant-then-Newton loop that takes over when plain
     /// Newton fails on a step, before the step is bisected; 0 switches it off.
     #[serde(default = "default_secant_iterations")]
@@ -322,6 +326,7 @@ impl Default for SolverSpec {
             max_iterations: default_iterations(),
             line_search: true,
             max_substep_depth: default_substep_depth(),
+            path_following: true,
             max_secant_iterations: default_secant_iterations(),
         }
     }

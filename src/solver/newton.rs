@@ -46,6 +46,7 @@
 
 use faer::dyn_stack::MemStack;
 
+use super::arclength::trace;
 use super::linear::LinearSolver;
 use crate::assembly::Discretization;
 use crate::element::TangentKind;
@@ -352,6 +353,7 @@ pub fn solve_increment(
         };
         ws.substep_start.copy_from(trial);
         ws.hist_base.copy_from_slice(&trial.history);
+        // 1. Plain Newton.
         let mut outcome = newton(
             disc,
             linear,
@@ -361,6 +363,35 @@ pub fn solve_increment(
             ws,
             Mode::Newton,
         );
+        // 2. Path following through a limit point, then Newton from the last arc point.
+        if outcome.is_err() && settings.path_following {
+            report.iterations += ws.residuals.len().saturating_sub(1) as u32;
+            trial.copy_from(&ws.substep_start);
+            let reference = reference(disc, &target);
+            if let Some((_, traced)) = trace(
+                disc, linear, settings, start, delta, done, to, reference, trial, ws,
+            ) {
+                report.iterations += traced.iterations;
+                report.factorizations += traced.factorizations;
+                report.substeps += traced.points;
+                ws.hist_base.copy_from_slice(&trial.history);
+                outcome = newton(
+                    disc,
+                    linear,
+                    settings,
+                    &target,
+                    &mut trial.unknowns,
+                    ws,
+                    Mode::Newton,
+                );
+            } else {
+                outcome = Err(Failure::NotConverged {
+                    residual: f64::NAN,
+                    reference,
+                });
+            }
+        }
+        // 3. Secant iterations, then Newton, from the start of the sub-step.
         if outcome.is_err() && settings.max_secant_iterations > 0 {
             report.iterations += ws.residuals.len().saturating_sub(1) as u32;
             trial.copy_from(&ws.substep_start);

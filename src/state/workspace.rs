@@ -33,6 +33,12 @@ pub struct Workspace {
     pub hist_try: Vec<CohesiveHistory>,
     /// State at the start of the current sub-step (for sub-stepping).
     pub substep_start: State,
+    /// Path following: load vector `G Delta eps`, its solution, last arc point, last step.
+    pub arc_f: Vec<f64>,
+    pub arc_dxf: Vec<f64>,
+    pub arc_xa: Vec<f64>,
+    pub arc_prev: Vec<f64>,
+    pub arc_pred: Vec<f64>,
     /// Residual norms of the last Newton loop (for convergence studies).
     pub residuals: Vec<f64>,
     /// Which model this workspace was sized for.
@@ -68,6 +74,11 @@ impl Workspace {
             hist_trial: vec![CohesiveHistory::default(); nh],
             hist_try: vec![CohesiveHistory::default(); nh],
             substep_start: State::virgin(n, nh),
+            arc_f: vec![0.0; n],
+            arc_dxf: vec![0.0; n],
+            arc_xa: vec![0.0; n],
+            arc_prev: vec![0.0; n],
+            arc_pred: vec![0.0; n],
             residuals: Vec::with_capacity(max_iterations + 2),
             model_id,
         }
