@@ -895,7 +895,7 @@ fn elastic_tangent_converges_under_mesh_refinement() {
 }
 
 // ---------------------------------------------------------------------------------------
-// 6. The minimal BC's multipliers
+// 6. The minimal BC's multipliers, and a known limitation
 // ---------------------------------------------------------------------------------------
 
 /// Under the minimal BC the boundary traction is uniform, `t = sigma n`, and the four
@@ -951,4 +951,40 @@ fn minimal_bc_multipliers_are_the_homogenized_stress() {
             inst.commit().unwrap();
         }
     }
+}
+
+/// KNOWN LIMITATION (ignored: it fails today). After tension, a trial with compression
+/// in x, tension in y and shear has no discrete equilibrium: one Gauss point ends at
+/// `delta_n = 0` with a sliding jump ~100x larger (here point 56, `ds ~ 3e-5`,
+/// `dn ~ +-3e-7`). The law applies the contact penalty to BOTH components when
+/// `delta_n < 0` (eq. 36) and the cohesive secant `k beta^2 ds` when `delta_n >= 0`, so the
+/// sliding traction jumps from `k beta^2 ds` to `lambda_p l_e ds` across `delta_n = 0`:
+/// the residual is discontinuous there. Linearized on the open side Newton predicts the
+/// point closed, linearized on the closed side it predicts it open: there is no
+/// equilibrium on either side, and Newton cycles between the two guesses of that point (relative residual
+/// stuck at ~1e-2, with any tolerance, line search and sub-stepping depth up to 16), and
+/// the update fails. With `effects.contact = false` the same trial converges in 10
+/// iterations. Not a bug of newton.rs; a property of the law (a frictionless contact,
+/// penalty on `dn` only, or a regularized switch would remove it).
+#[test]
+#[ignore = "known limitation: the contact law makes the sliding traction discontinuous at dn = 0"]
+fn mixed_contact_with_sliding_reaches_equilibrium() {
+    let model = two_circles(
+        "linear",
+        "plane_stress",
+        &[("tolerance = 1e-12", "tolerance = 1e-6")],
+    );
+    let mut inst = Instance::new(model.clone());
+    let mut ws = model.workspace();
+    for level in [0.4e-4, 0.8e-4, 1.2e-4, 1.6e-4] {
+        inst.update(scaled(DIR, level), &mut ws, TangentRequest::None)
+            .unwrap();
+        inst.commit().unwrap();
+    }
+    let r = inst.update(
+        [-0.6e-4, 0.9e-4, 0.3e-4],
+        &mut ws,
+        TangentRequest::Consistent,
+    );
+    assert!(r.is_ok(), "{}", r.unwrap_err());
 }
