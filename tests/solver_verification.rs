@@ -286,6 +286,47 @@ fn set_up(model: &Arc<Model>, state: InterfaceState, what: &str) -> (Instance, [
     (inst, eps, base)
 }
 
+/// Compares `D_hom` of the base trial with central FDs of step `h` and `2h` (see
+/// [`fd_tangent`]); prints one line, asserts symmetry, FD convergence and agreement.
+fn check_against_fd(
+    inst: &mut Instance,
+    ws: &mut rve::Workspace,
+    eps: [f64; 3],
+    base: &Response,
+    label: &str,
+) {
+    let expected = counts(&base.report);
+    let h = FD_STEP * eps.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+    let fd_h = fd_tangent(inst, ws, eps, h, expected, label);
+    let fd_2h = fd_tangent(inst, ws, eps, 2.0 * h, expected, label);
+    // The FD itself is converged: doubling the step changes it by far less than the
+    // tolerance the tangent is held to.
+    let fd_change = rel_diff(&fd_2h, &fd_h);
+    let error = rel_diff(&fd_h, &base.tangent);
+    // Every branch of the law has a symmetric tangent, and so has K (the minimal BC adds
+    // a symmetric saddle): D_hom is symmetric.
+    let d = mat(&base.tangent);
+    let asymmetry = (d - d.transpose()).norm() / d.norm();
+    println!(
+        "{label:48} L/U/C {:2} {:2} {:2}  it {}  h {h:.1e}  |D-FD(h)|/|D| {error:.1e}  \
+         |FD(2h)-FD(h)|/|D| {fd_change:.1e}  asym {asymmetry:.0e}",
+        expected.0, expected.1, expected.2, base.report.iterations
+    );
+    assert!(
+        asymmetry < 1e-12,
+        "{label}: D_hom not symmetric: {asymmetry:.2e}"
+    );
+    assert!(
+        fd_change < 1e-7,
+        "{label}: FD not converged ({fd_change:.2e}); pick another h or state"
+    );
+    assert!(
+        error < 1e-6,
+        "{label}: D_hom differs from FD by {error:.2e}\nD_hom = {:?}\nFD    = {fd_h:?}",
+        base.tangent
+    );
+}
+
 /// The consistent tangent `D_hom` (eq. 18) is the derivative of the homogenized stress
 /// (eq. 6): it matches a converged central finite difference to 1e-6 relative (Frobenius
 /// norm, relative to ||D_hom||), for the four BCs, both plane states, and interface
@@ -300,48 +341,73 @@ fn tangent_matches_central_difference_of_stress() {
             for state in STATES {
                 let what = format!("{bc} {analysis} {state:?}");
                 let (mut inst, eps, base) = set_up(&model, state, &what);
-                let expected = counts(&base.report);
-                let h = FD_STEP * eps.iter().fold(0.0f64, |m, e| m.max(e.abs()));
-                let fd_h = fd_tangent(&mut inst, &mut ws, eps, h, expected, &what);
-                let fd_2h = fd_tangent(&mut inst, &mut ws, eps, 2.0 * h, expected, &what);
-                // The FD itself is converged: halving the step changes it by far less
-                // than the tolerance the tangent is held to.
-                let fd_change = rel_diff(&fd_2h, &fd_h);
-                let error = rel_diff(&fd_h, &base.tangent);
-                // Every branch of the law has a symmetric tangent, and so has K (the
-                // minimal BC adds a symmetric saddle): D_hom is symmetric.
-                let d = mat(&base.tangent);
-                let asymmetry = (d - d.transpose()).norm() / d.norm();
-                let post = if state == InterfaceState::PostPeak && bc != "taylor" {
-                    post_peak_points(&model, inst.committed(), eps)
-                } else {
+                let past_peak = if bc == "taylor" {
                     0
+                } else {
+                    post_peak_points(&model, inst.committed(), eps)
                 };
-                println!(
-                    "{analysis:12} {bc:8} {:9} L/U/C {:2} {:2} {:2} (past peak {post:2})  \
-                     it {}  h {h:.1e}  |D-FD(h)|/|D| {error:.1e}  |FD(2h)-FD(h)|/|D| {fd_change:.1e}  \
-                     asym {asymmetry:.0e}",
-                    format!("{state:?}"),
-                    expected.0,
-                    expected.1,
-                    expected.2,
-                    base.report.iterations
-                );
-                assert!(
-                    asymmetry < 1e-12,
-                    "{what}: D_hom not symmetric: {asymmetry:.2e}"
-                );
-                assert!(
-                    fd_change < 1e-7,
-                    "{what}: FD not converged ({fd_change:.2e}); pick another h or state"
-                );
-                assert!(
-                    error < 1e-6,
-                    "{what}: D_hom differs from FD by {error:.2e}\nD_hom = {:?}\nFD    = {fd_h:?}",
-                    base.tangent
+                check_against_fd(
+                    &mut inst,
+                    &mut ws,
+                    eps,
+                    &base,
+                    &format!("{analysis} {bc} {state:?} ({past_peak} past peak)"),
                 );
             }
         }
+    }
+}
+
+/// The same with the Newton-Cotes (Lobatto2) interface quadrature, two points per
+/// element: another history layout and points at the nodes.
+#[test]
+fn tangent_matches_central_difference_with_lobatto2() {
+    let lobatto = (
+        "[mesh]\nsize = 1.0",
+        "[mesh]\nsize = 1.0\ninterface_quadrature = \"lobatto2\"",
+    );
+    for bc in ["periodic", "minimal"] {
+        let model = two_circles(bc, "plane_stress", &[lobatto]);
+        assert_eq!(model.disc.history_len(), 48);
+        let mut ws = model.workspace();
+        for state in STATES {
+            let what = format!("lobatto2 {bc} {state:?}");
+            let (mut inst, eps, base) = set_up(&model, state, &what);
+            check_against_fd(&mut inst, &mut ws, eps, &base, &what);
+        }
+    }
+}
+
+/// Past the macroscopic peak (periodic BC, tension with shear): `D_hom` has a negative
+/// eigenvalue (softening), the RVE tangent K is indefinite, loading and unloading points
+/// coexist, and `D_hom` still matches the FD.
+#[test]
+fn tangent_matches_central_difference_in_macroscopic_softening() {
+    for analysis in ANALYSES {
+        let model = two_circles("periodic", analysis, &[]);
+        let mut inst = Instance::new(model.clone());
+        let mut ws = model.workspace();
+        for level in [0.4e-4, 0.8e-4, 1.2e-4, 1.6e-4, 1.8e-4, 2.0e-4] {
+            inst.update(scaled(DIR, level), &mut ws, TangentRequest::None)
+                .unwrap();
+            inst.commit().unwrap();
+        }
+        let eps = scaled(DIR, 2.05e-4);
+        let base = inst
+            .update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
+        let (loading, unloading, _) = counts(&base.report);
+        assert!(loading > 0 && unloading > 0, "{:?}", base.report);
+        assert_eq!(base.report.substeps, 1);
+        let lowest = min_sym_eigenvalue(&mat(&base.tangent));
+        assert!(lowest < 0.0, "{analysis}: no softening ({lowest})");
+        check_against_fd(
+            &mut inst,
+            &mut ws,
+            eps,
+            &base,
+            &format!("softening periodic {analysis} (eig {lowest:.0})"),
+        );
     }
 }
 
