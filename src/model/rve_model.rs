@@ -13,8 +13,9 @@ use crate::scene::{Scene, SolverSpec};
 use crate::solver::{solve_increment, IncrementReport, LinearSolver, TangentRequest};
 use crate::state::{State, Workspace};
 
-/// Largest strain component accepted; beyond it a small-strain RVE makes no sense.
-pub const MAX_STRAIN: f64 = 1.0;
+/// Largest strain component accepted: 10 %, a hundred times the strains at which concrete
+/// fails; beyond it a small-strain RVE makes no sense and the input is taken as absurd.
+pub const MAX_STRAIN: f64 = 0.1;
 
 static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(1);
 

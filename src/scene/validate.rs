@@ -168,10 +168,17 @@ impl SceneSpec {
                     "must lie in 1..=1000000",
                 ));
             }
-            if seg.to.iter().any(|v| !v.is_finite() || v.abs() > 1.0) {
+            if seg
+                .to
+                .iter()
+                .any(|v| !v.is_finite() || v.abs() > crate::model::MAX_STRAIN)
+            {
                 return Err(Error::scene(
                     format!("path[{k}].to"),
-                    "strain components must be finite and at most 1 in magnitude",
+                    format!(
+                        "strain components must be finite and at most {} in magnitude",
+                        crate::model::MAX_STRAIN
+                    ),
                 ));
             }
         }

@@ -30,7 +30,8 @@
 //! If an increment fails (no convergence in `max_iterations`, a singular or non-finite
 //! system), it is bisected and the halves are solved in turn, each from the converged
 //! state (fluctuation and interface history) of the previous one; after two successes in
-//! a row the step doubles again. Past `max_substep_depth` bisections the update fails
+//! a row the step doubles again (one level up). Past `max_substep_depth` levels of
+//! bisection (a step of `2^-max_substep_depth` of the increment) the update fails
 //! with a suggested step ratio (UMAT's PNEWDT), and the committed state is untouched
 //! because every iterate lives in the trial state.
 //!
@@ -417,10 +418,12 @@ pub fn solve_increment(
                 successes_in_row += 1;
                 if successes_in_row >= 2 && step < 1.0 {
                     step *= 2.0;
+                    depth = depth.saturating_sub(1);
                     successes_in_row = 0;
                 }
             }
             Err(failure) => {
+                report.iterations += ws.residuals.len().saturating_sub(1) as u32;
                 trial.copy_from(&ws.substep_start);
                 depth += 1;
                 successes_in_row = 0;
