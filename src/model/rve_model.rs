@@ -10,7 +10,7 @@ use crate::interface::{CohesiveLaw, Penalty};
 use crate::mesh::{build_microstructure, Mesh, Microstructure};
 use crate::scene::BoundaryKind;
 use crate::scene::{Scene, SolverSpec};
-use crate::solver::{solve_increment, IncrementReport, LinearSolver, TangentRequest};
+use crate::solver::{solve_increment, IncrementReport, LinearSolver, Problem, TangentRequest};
 use crate::state::{State, Workspace};
 
 /// Largest strain component accepted: 10 %, a hundred times the strains at which concrete
@@ -43,6 +43,8 @@ pub struct Model {
     pub solver: SolverSpec,
     /// Homogenized tangent of the virgin RVE (row-major).
     pub elastic_tangent: [f64; 9],
+    /// `-K_el^-1 G` of the virgin RVE (n x 3): the solver's predictor.
+    pub elastic_sensitivity: Vec<f64>,
 }
 
 impl std::fmt::Debug for Model {
@@ -111,6 +113,7 @@ impl Model {
             linear,
             solver: spec.solver,
             elastic_tangent: [0.0; 9],
+            elastic_sensitivity: Vec::new(),
         };
         // The virgin tangent: one converged "update" at zero strain.
         let mut ws = model.workspace();
@@ -124,6 +127,7 @@ impl Model {
             TangentRequest::Consistent,
         )?;
         model.elastic_tangent = response.tangent;
+        model.elastic_sensitivity = ws.kg.iter().map(|v| -v).collect();
         Ok(model)
     }
 
@@ -177,11 +181,15 @@ impl Model {
             });
         }
         let mut tangent = [0.0; 9];
+        let problem = Problem {
+            disc: &self.disc,
+            hom: &self.hom,
+            linear: &self.linear,
+            settings: &self.solver,
+            predictor: &self.elastic_sensitivity,
+        };
         let report = solve_increment(
-            &self.disc,
-            &self.hom,
-            &self.linear,
-            &self.solver,
+            &problem,
             committed,
             strain,
             request,

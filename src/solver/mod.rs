@@ -6,4 +6,4 @@ mod linear;
 mod newton;
 
 pub use linear::{FactorKind, LinearSolver, NumericFactor};
-pub use newton::{solve_increment, IncrementReport, TangentRequest};
+pub use newton::{solve_increment, IncrementReport, Problem, TangentRequest};

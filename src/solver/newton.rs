@@ -37,12 +37,17 @@
 //!
 //! # Tangent
 //! `D_hom = D_Taylor - (1/V) G^T K^-1 G` at the converged state (eq. 18), with `K` the
-//! consistent tangent there. No new factorization in the usual case: `K^-1 G` is computed
-//! with the last factorization of the Newton loop (`K` at the previous iterate) and
-//! corrected by iterative refinement against the converged `K`, until `D_hom` changes by
-//! less than 1e-13 relative; if the two matrices are bitwise equal (elastic, unloading and
-//! contact branches) there is nothing to refine. Only when refinement stalls (a branch
-//! switched in the last step) or the loop did no iteration is the converged `K` factorized.
+//! consistent tangent there, by condensation with the factorization the Newton loop left:
+//! - if the converged `K` is bitwise the last factorized one (unloading, contact, the
+//!   elastic range: piecewise linear branches), `K^-1 G` costs three solves;
+//! - if the last Newton step was small (`||dx|| < 1e-5 ||x||`, typical after many
+//!   iterations), `K^-1 G` from the last factorization (`K` at the previous iterate) is
+//!   corrected by iterative refinement against the converged `K` until `D_hom` changes by
+//!   less than 1e-13 relative;
+//! - otherwise (typically a two-iteration increment before the peak, where refinement
+//!   would need more sweeps than a factorization costs), or when refinement stalls, the
+//!   converged `K` is factorized once more. `IncrementReport::factorizations` counts it.
+//!
 //! With sub-steps, the tangent is that of the last sub-step.
 
 use faer::dyn_stack::MemStack;
@@ -310,15 +315,70 @@ fn try_step(
     );
 }
 
+/// The fixed parts of one RVE problem, borrowed from its model.
+#[derive(Clone, Copy)]
+pub struct Problem<'a> {
+    pub disc: &'a Discretization,
+    pub hom: &'a Homogenizer,
+    pub linear: &'a LinearSolver,
+    pub settings: &'a SolverSpec,
+    /// Elastic sensitivity `-K_el^-1 G` (n x 3, column-major), or empty: the predictor
+    /// `x_0 = x_n + X_el Delta eps` of each step, taken when it lowers the residual. Before
+    /// the peak it is close to the Newton predictor `x_n + X_n Delta eps` and saves its
+    /// factorization.
+    pub predictor: &'a [f64],
+}
+
+/// Applies the elastic predictor to `x` for a strain step `step` from `from` if the step
+/// moves away from the origin (loading: on unloading the secant response is linear and
+/// plain Newton from `x` is exact in one iteration) and the predictor lowers the residual
+/// at `target`; `ws.hist_base` must hold the step's start history.
+fn predict(
+    problem: &Problem,
+    x: &mut [f64],
+    from: &[f64; 3],
+    step: &[f64; 3],
+    target: &[f64; 3],
+    ws: &mut Workspace,
+) {
+    let (disc, n) = (problem.disc, problem.disc.n());
+    let outward = from[0] * step[0] + from[1] * step[1] + from[2] * step[2] >= 0.0;
+    if problem.predictor.len() != 3 * n || !outward {
+        return;
+    }
+    disc.evaluate(
+        x,
+        target,
+        &ws.hist_base,
+        &mut ws.hist_try,
+        &mut ws.r_try,
+        None,
+    );
+    let before = norm(&ws.r_try);
+    for i in 0..n {
+        ws.x_try[i] = x[i]
+            + problem.predictor[i] * step[0]
+            + problem.predictor[n + i] * step[1]
+            + problem.predictor[2 * n + i] * step[2];
+    }
+    disc.evaluate(
+        &ws.x_try,
+        target,
+        &ws.hist_base,
+        &mut ws.hist_try,
+        &mut ws.r_try,
+        None,
+    );
+    if norm(&ws.r_try) < before {
+        x.copy_from_slice(&ws.x_try);
+    }
+}
+
 /// Solves the RVE from the committed state to macro strain `eps`, writing the converged
-/// state into `trial` (resized like `committed`). The stress, and the tangent if asked,
-/// go to `stress`/`tangent`. `committed` is never modified.
-#[allow(clippy::too_many_arguments)]
+/// state into `trial` (resized like `committed`) and, if asked, the tangent into
+/// `tangent`. `committed` is never modified.
 pub fn solve_increment(
-    disc: &Discretization,
-    hom: &Homogenizer,
-    linear: &LinearSolver,
-    settings: &SolverSpec,
+    problem: &Problem,
     committed: &State,
     eps: [f64; 3],
     request: TangentRequest,
@@ -326,6 +386,13 @@ pub fn solve_increment(
     trial: &mut State,
     tangent: &mut [f64; 9],
 ) -> Result<IncrementReport> {
+    let Problem {
+        disc,
+        hom,
+        linear,
+        settings,
+        ..
+    } = *problem;
     trial.copy_from(committed);
     let mut report = IncrementReport::default();
     if disc.n() == 0 {
@@ -354,6 +421,20 @@ pub fn solve_increment(
         };
         ws.substep_start.copy_from(trial);
         ws.hist_base.copy_from_slice(&trial.history);
+        let step_strain = [
+            target[0] - trial.strain[0],
+            target[1] - trial.strain[1],
+            target[2] - trial.strain[2],
+        ];
+        let from = trial.strain;
+        predict(
+            problem,
+            &mut trial.unknowns,
+            &from,
+            &step_strain,
+            &target,
+            ws,
+        );
         // 1. Plain Newton.
         let mut outcome = newton(
             disc,
@@ -451,7 +532,13 @@ pub fn solve_increment(
     report.unloading = counts.unloading;
     report.contact = counts.contact;
     if request == TangentRequest::Consistent {
-        report.factorizations += condensed_tangent(disc, linear, ws)?;
+        // Refinement converges at the rate of the relative change of K over the last
+        // Newton step, about ||dx|| / ||x||; three refinement sweeps cost about one fresh
+        // LL^T factorization here (benches/solver.rs), so refine only when the last step
+        // was small enough to converge in two or three sweeps.
+        let last_step = norm(&ws.dx) / norm(&trial.unknowns).max(f64::MIN_POSITIVE);
+        let refine = last_step < 1e-5;
+        report.factorizations += condensed_tangent(disc, linear, ws, refine)?;
         *tangent = hom.tangent(disc, &ws.kg);
     }
     Ok(report)
@@ -463,6 +550,7 @@ fn condensed_tangent(
     disc: &Discretization,
     linear: &LinearSolver,
     ws: &mut Workspace,
+    refine: bool,
 ) -> Result<u32> {
     let n = disc.n();
     let fresh = |ws: &mut Workspace| -> Result<u32> {
@@ -485,12 +573,13 @@ fn condensed_tangent(
         linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
         Ok(1)
     };
-    if !ws.factored {
+    let unchanged = ws.factored && ws.k == ws.k_factored;
+    if !ws.factored || !(refine || unchanged) {
         return fresh(ws);
     }
     ws.kg.copy_from_slice(&disc.g);
     linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
-    if ws.k == ws.k_factored {
+    if unchanged {
         return Ok(0);
     }
     // Iterative refinement against the converged K, watching the condensed term G^T X.
@@ -513,7 +602,7 @@ fn condensed_tangent(
         .iter()
         .fold(0.0f64, |m, v| m.max(v.abs()))
         .max(1e-300);
-    for _ in 0..6 {
+    for _ in 0..4 {
         for c in 0..3 {
             let (x, res) = (
                 &ws.kg[c * n..(c + 1) * n],
