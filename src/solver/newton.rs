@@ -355,11 +355,10 @@ fn predict(
         None,
     );
     let before = norm(&ws.r_try);
-    for i in 0..n {
-        ws.x_try[i] = x[i]
-            + problem.predictor[i] * step[0]
-            + problem.predictor[n + i] * step[1]
-            + problem.predictor[2 * n + i] * step[2];
+    let (p0, rest) = problem.predictor.split_at(n);
+    let (p1, p2) = rest.split_at(n);
+    for (i, t) in ws.x_try.iter_mut().enumerate() {
+        *t = x[i] + p0[i] * step[0] + p1[i] * step[1] + p2[i] * step[2];
     }
     disc.evaluate(
         &ws.x_try,
