@@ -78,8 +78,10 @@ pub struct IncrementReport {
     pub iterations: u32,
     /// Accepted sub-steps (1 when the increment converged in one go).
     pub substeps: u32,
-    /// Numeric LU factorizations, including any for the tangent.
+    /// Numeric factorizations, including any for the tangent.
     pub factorizations: u32,
+    /// How many of them were LU (indefinite tangent); the rest were LL^T.
+    pub lu_factorizations: u32,
     /// Interface points on the loading / unloading / contact branch at the end.
     pub loading: usize,
     pub unloading: usize,
@@ -392,6 +394,7 @@ pub fn solve_increment(
         settings,
         ..
     } = *problem;
+    let lu_before = ws.factor.lu_count;
     trial.copy_from(committed);
     let mut report = IncrementReport::default();
     if disc.n() == 0 {
@@ -540,6 +543,7 @@ pub fn solve_increment(
         report.factorizations += condensed_tangent(disc, linear, ws, refine)?;
         *tangent = hom.tangent(disc, &ws.kg);
     }
+    report.lu_factorizations = (ws.factor.lu_count - lu_before) as u32;
     Ok(report)
 }
 

@@ -1,0 +1,50 @@
+//! The hot path allocates nothing: once a workspace and an instance exist (and the
+//! factorization buffers have grown on a first update), `Instance::update` and `commit`
+//! make no heap allocation, on loading, unloading and contact increments alike. The hot
+//! path is every increment that converges in one step with LL^T factorizations; faer's
+//! supernodal LU (indefinite tangents, past the peak) allocates inside faer, and so do the
+//! fallbacks (path following, error messages), which are asserted to be rare instead.
+
+mod common;
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+
+use std::sync::Arc;
+
+use counting_alloc::count_allocations;
+use rve::{Instance, Model, TangentRequest};
+
+#[test]
+fn update_and_commit_do_not_allocate() {
+    let scene = common::scene("scenes/paper_rve_cycle.toml");
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws = model.workspace();
+    let mut inst = Instance::new(model.clone());
+    let path = rve::cli::path_points(&scene.spec.path);
+    // Warm-up: the first update sizes faer's numeric buffers.
+    inst.update(path[0], &mut ws, TangentRequest::Consistent)
+        .unwrap();
+    inst.commit().unwrap();
+    let (mut total, mut checked) = (0, 0);
+    for (k, eps) in path.iter().enumerate().skip(1) {
+        let mut report = None;
+        let n = count_allocations(|| {
+            report = inst
+                .update(*eps, &mut ws, TangentRequest::Consistent)
+                .ok()
+                .map(|r| r.report);
+            inst.commit().unwrap();
+        });
+        let report = report.unwrap_or_else(|| panic!("increment {} failed", k + 1));
+        if report.lu_factorizations == 0 && report.substeps == 1 {
+            assert_eq!(n, 0, "increment {}: {n} allocations ({report:?})", k + 1);
+            checked += 1;
+        }
+        total += 1;
+    }
+    // The allocation-free path is the rule: 60 increments, all but the peak ones.
+    assert!(
+        checked + 3 >= total,
+        "only {checked} of {total} increments on the hot path"
+    );
+}
