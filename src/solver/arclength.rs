@@ -21,6 +21,7 @@
 use faer::dyn_stack::MemStack;
 
 use super::linear::LinearSolver;
+use super::newton::{evaluate_current, factorize_current};
 use crate::assembly::Discretization;
 use crate::element::TangentKind;
 use crate::scene::SolverSpec;
@@ -86,25 +87,14 @@ pub(super) fn trace(
         ws.hist_base.copy_from_slice(&trial.history);
         ws.arc_xa.copy_from_slice(&trial.unknowns);
         // Tangent at the arc point: K dx_f = -f.
-        disc.evaluate_with(
+        evaluate_current(
+            disc,
             &trial.unknowns,
             &eps_at(t_a),
-            &ws.hist_base,
-            &mut ws.hist_trial,
-            &mut ws.r,
-            Some(&mut ws.k),
             TangentKind::Consistent,
+            ws,
         );
-        if linear
-            .factorize(
-                &disc.pattern.symbolic,
-                &ws.k,
-                &mut ws.factor,
-                true,
-                MemStack::new(&mut ws.stack),
-            )
-            .is_err()
-        {
+        if factorize_current(disc, linear, ws).is_err() {
             return None;
         }
         out.factorizations += 1;
@@ -140,14 +130,12 @@ pub(super) fn trace(
         let mut t = t_a + dt_pred;
         let mut converged = false;
         for _ in 0..MAX_CORRECTOR {
-            disc.evaluate_with(
+            evaluate_current(
+                disc,
                 &trial.unknowns,
                 &eps_at(t),
-                &ws.hist_base,
-                &mut ws.hist_trial,
-                &mut ws.r,
-                Some(&mut ws.k),
                 TangentKind::Consistent,
+                ws,
             );
             let rnorm = dot(&ws.r, &ws.r).sqrt();
             if !rnorm.is_finite() {
@@ -157,16 +145,7 @@ pub(super) fn trace(
                 converged = true;
                 break;
             }
-            if linear
-                .factorize(
-                    &disc.pattern.symbolic,
-                    &ws.k,
-                    &mut ws.factor,
-                    true,
-                    MemStack::new(&mut ws.stack),
-                )
-                .is_err()
-            {
+            if factorize_current(disc, linear, ws).is_err() {
                 break;
             }
             out.factorizations += 1;

@@ -127,6 +127,41 @@ fn reference(disc: &Discretization, eps: &[f64; 3]) -> f64 {
     sq.sqrt().max(1e-8 * g_frob)
 }
 
+/// Evaluates `R` and `K` at `x` into `ws.r`, `ws.k` and `ws.hist_trial`, from the
+/// sub-step's history `ws.hist_base`.
+pub(super) fn evaluate_current(
+    disc: &Discretization,
+    x: &[f64],
+    eps: &[f64; 3],
+    kind: TangentKind,
+    ws: &mut Workspace,
+) -> crate::assembly::SystemEvaluation {
+    disc.evaluate_with(
+        x,
+        eps,
+        &ws.hist_base,
+        &mut ws.hist_trial,
+        &mut ws.r,
+        Some(&mut ws.k),
+        kind,
+    )
+}
+
+/// Factorizes `ws.k` into `ws.factor`.
+pub(super) fn factorize_current(
+    disc: &Discretization,
+    linear: &LinearSolver,
+    ws: &mut Workspace,
+) -> std::result::Result<super::FactorKind, String> {
+    linear.factorize(
+        &disc.pattern.symbolic,
+        &ws.k,
+        &mut ws.factor,
+        true,
+        MemStack::new(&mut ws.stack),
+    )
+}
+
 /// How a Newton loop globalizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Mode {
@@ -168,15 +203,7 @@ fn newton(
     };
     ws.factored = false;
     ws.residuals.clear();
-    disc.evaluate_with(
-        x,
-        eps,
-        &ws.hist_base,
-        &mut ws.hist_trial,
-        &mut ws.r,
-        Some(&mut ws.k),
-        kind,
-    );
+    evaluate_current(disc, x, eps, kind, ws);
     let mut rnorm = norm(&ws.r);
     let mut factorizations = 0;
     let mut iteration = 0u32;
@@ -190,14 +217,7 @@ fn newton(
         if rnorm <= tolerance {
             if kind == TangentKind::Secant {
                 // Converged on secant matrices: the tangent needs the consistent one.
-                disc.evaluate(
-                    x,
-                    eps,
-                    &ws.hist_base,
-                    &mut ws.hist_trial,
-                    &mut ws.r,
-                    Some(&mut ws.k),
-                );
+                evaluate_current(disc, x, eps, TangentKind::Consistent, ws);
                 ws.factored = false;
             }
             return Ok((iteration, factorizations));
@@ -208,10 +228,7 @@ fn newton(
                 reference,
             });
         }
-        let stack = MemStack::new(&mut ws.stack);
-        linear
-            .factorize(&disc.pattern.symbolic, &ws.k, &mut ws.factor, true, stack)
-            .map_err(Failure::Singular)?;
+        factorize_current(disc, linear, ws).map_err(Failure::Singular)?;
         factorizations += 1;
         ws.k_factored.copy_from_slice(&ws.k);
         ws.factored = kind == TangentKind::Consistent;
@@ -247,15 +264,7 @@ fn newton(
             };
             if wanted != kind {
                 kind = wanted;
-                disc.evaluate_with(
-                    x,
-                    eps,
-                    &ws.hist_base,
-                    &mut ws.hist_trial,
-                    &mut ws.r,
-                    Some(&mut ws.k),
-                    kind,
-                );
+                evaluate_current(disc, x, eps, kind, ws);
             }
         }
         rnorm = new_norm;
@@ -557,19 +566,11 @@ fn condensed_tangent(
 ) -> Result<u32> {
     let n = disc.n();
     let fresh = |ws: &mut Workspace| -> Result<u32> {
-        linear
-            .factorize(
-                &disc.pattern.symbolic,
-                &ws.k,
-                &mut ws.factor,
-                true,
-                MemStack::new(&mut ws.stack),
-            )
-            .map_err(|e| Error::Solve {
-                reason: format!("singular RVE tangent at the converged state ({e:?})"),
-                depth: 0,
-                suggested_step_ratio: 0.5,
-            })?;
+        factorize_current(disc, linear, ws).map_err(|e| Error::Solve {
+            reason: format!("singular RVE tangent at the converged state ({e:?})"),
+            depth: 0,
+            suggested_step_ratio: 0.5,
+        })?;
         ws.k_factored.copy_from_slice(&ws.k);
         ws.factored = true;
         ws.kg.copy_from_slice(&disc.g);
