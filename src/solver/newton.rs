@@ -90,9 +90,14 @@ pub struct IncrementReport {
 
 /// Why one Newton loop failed.
 enum Failure {
-    NotConverged { residual: f64, reference: f64 },
+    NotConverged {
+        residual: f64,
+        reference: f64,
+    },
     Singular(String),
     NonFinite,
+    /// Path following could not trace the equilibrium path of the step.
+    PathLost,
 }
 
 impl Failure {
@@ -107,6 +112,9 @@ impl Failure {
             ),
             Failure::Singular(e) => format!("singular RVE tangent ({e})"),
             Failure::NonFinite => "non-finite residual or correction".to_string(),
+            Failure::PathLost => {
+                "the equilibrium path could not be traced through a limit point".to_string()
+            }
         }
     }
 }
@@ -478,10 +486,7 @@ pub fn solve_increment(
                     Mode::Newton,
                 );
             } else {
-                outcome = Err(Failure::NotConverged {
-                    residual: f64::NAN,
-                    reference,
-                });
+                outcome = Err(Failure::PathLost);
             }
         }
         // 3. Secant iterations, then Newton, from the start of the sub-step.
