@@ -156,6 +156,9 @@ pub fn triangulate_straight_interface(
     Ok(PhaseMesh { nodes, triangles })
 }
 
+/// Node coordinates and counter-clockwise triangles of a triangulation.
+type NodesAndFaces = (Vec<[f64; 2]>, Vec<[usize; 3]>);
+
 fn centroid(nodes: &[[f64; 2]], ids: [usize; 3]) -> [f64; 2] {
     ids.iter().fold([0.0, 0.0], |c, &i| {
         [c[0] + nodes[i][0] / 3.0, c[1] + nodes[i][1] / 3.0]
@@ -173,7 +176,7 @@ fn constrained_mesh(
     polylines: &[Vec<[f64; 2]>],
     h_bulk: f64,
     min_angle_deg: f64,
-) -> Result<(Vec<[f64; 2]>, Vec<[usize; 3]>)> {
+) -> Result<NodesAndFaces> {
     let to_point = |p: &[f64; 2]| Point2::new(p[0], p[1]);
     let (mut x_breaks, mut y_breaks) = (Vec::new(), Vec::new());
     for p in polylines
