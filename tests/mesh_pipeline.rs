@@ -155,6 +155,38 @@ fn fine_and_ellipse_rves_match_the_papers_counts() {
 }
 
 #[test]
+fn single_interface_scene_has_a_full_height_itz() {
+    let micro = build_microstructure(&common::scene("scenes/single_interface.toml")).unwrap();
+    let mesh = &micro.mesh;
+    // Left half is the aggregate phase: 1 x 2 mm.
+    check_mesh(mesh, Some(2.0));
+    let s = MeshStats::of(mesh);
+    assert_eq!(s.interface_elements, 10);
+    assert!((s.interface_length - 2.0).abs() < 1e-14);
+    assert_eq!(micro.geometric_area_fraction, Some(0.5));
+    for e in &mesh.interfaces {
+        assert!((e.length - 0.2).abs() < 1e-14 && e.normal == [1.0, 0.0]);
+        assert!(e.nodes.iter().all(|&n| mesh.nodes[n][0] == 1.0));
+    }
+    // The interface ends on the bottom and top sides: two copies there, paired alike.
+    let b = &mesh.boundary;
+    for side in [&b.bottom, &b.top] {
+        assert_eq!(side.iter().filter(|&&n| mesh.nodes[n][0] == 1.0).count(), 2);
+    }
+    // Off-centre, other sizes, both periodic-matching.
+    for (x, size, itz) in [("0.3", "0.2", "0.1"), ("1.85", "0.3", "0.25")] {
+        let text = std::fs::read_to_string(common::repo("scenes/single_interface.toml"))
+            .unwrap()
+            .replace("x = 1.0", &format!("x = {x}"))
+            .replace("size = 0.15", &format!("size = {size}"))
+            .replace("interface_size = 0.2", &format!("interface_size = {itz}"));
+        let micro = build_microstructure(&Scene::from_toml_str(&text, ".").unwrap()).unwrap();
+        let x: f64 = x.parse().unwrap();
+        check_mesh(&micro.mesh, Some(2.0 * x));
+    }
+}
+
+#[test]
 fn random_seeds_and_sizes_give_valid_meshes() {
     for seed in [1, 2, 3, 5, 8, 13] {
         for (size, itz) in [("0.84", "0.48"), ("0.5", "0.3")] {

@@ -174,3 +174,25 @@ fn scene_file_errors_name_the_file() {
 fn embedded_default_scene_is_valid() {
     Scene::embedded_default().unwrap();
 }
+
+#[test]
+fn straight_interface_position_is_checked() {
+    let scene = std::fs::read_to_string(common::repo("scenes/single_interface.toml")).unwrap();
+    for bad in ["x = 0.0", "x = 2.0", "x = -1.0", "x = nan"] {
+        let text = scene.replace("x = 1.0", bad);
+        let err = Scene::from_toml_str(&text, ".").unwrap_err().to_string();
+        assert_mentions(&err, &["geometry.x", "0 < x < 2"]);
+    }
+    let err = Scene::from_toml_str(&scene.replace("x = 1.0", "x = \"a\""), ".")
+        .unwrap_err()
+        .to_string();
+    assert_mentions(&err, &["geometry.x"]);
+    let err = Scene::from_toml_str(&scene.replace("x = 1.0", "x = 1.0\ny = 2.0"), ".")
+        .unwrap_err()
+        .to_string();
+    assert_mentions(&err, &["unknown field `y`"]);
+    let err = Scene::from_toml_str(&scene.replace("x = 1.0\n", ""), ".")
+        .unwrap_err()
+        .to_string();
+    assert_mentions(&err, &["missing field `x`"]);
+}

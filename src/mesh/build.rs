@@ -5,7 +5,7 @@ use std::path::Path;
 use super::gmsh::read_msh;
 use super::itz::{insert_itz, without_itz};
 use super::model::{Mesh, PhaseMesh};
-use super::triangulate::triangulate;
+use super::triangulate::{triangulate, triangulate_straight_interface};
 use crate::error::{Error, Result};
 use crate::geometry::{build_inclusions, place_random, Inclusion};
 use crate::scene::{GeometrySpec, Scene};
@@ -14,9 +14,11 @@ use crate::scene::{GeometrySpec, Scene};
 #[derive(Clone, Debug)]
 pub struct Microstructure {
     pub mesh: Mesh,
-    /// Exact inclusion shapes (empty for Gmsh meshes and homogeneous cells).
+    /// Exact inclusion shapes (empty for Gmsh meshes, homogeneous cells and the straight
+    /// interface).
     pub inclusions: Vec<Inclusion>,
-    /// Exact inclusion area over cell area, before discretisation (None for Gmsh).
+    /// Exact inclusion area over cell area, before discretisation (None for Gmsh; for the
+    /// straight interface the part left of it).
     pub geometric_area_fraction: Option<f64>,
     /// Random placement rounds used (None unless random).
     pub placement_rounds: Option<u32>,
@@ -44,6 +46,23 @@ pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
                 mesh,
                 inclusions: Vec::new(),
                 geometric_area_fraction: None,
+                placement_rounds: None,
+            });
+        }
+        GeometrySpec::StraightInterface(s) => {
+            let phase_mesh = triangulate_straight_interface(
+                width,
+                height,
+                s.x,
+                spec.mesh.size,
+                spec.mesh.interface_size.unwrap_or(spec.mesh.size),
+                spec.mesh.min_angle,
+            )?;
+            let mesh = finish(phase_mesh, width, height, spec.effects.cohesive)?;
+            return Ok(Microstructure {
+                mesh,
+                inclusions: Vec::new(),
+                geometric_area_fraction: Some(s.x / width),
                 placement_rounds: None,
             });
         }

@@ -8,10 +8,17 @@
 //! node is renumbered to a duplicate created for it. Where two inclusions share a vertex
 //! (possible in Gmsh meshes only; generated microstructures keep a gap), the two
 //! inclusions stay bonded at that vertex and the matrix around it shares one duplicate.
+//!
+//! ITZ nodes may lie on the cell boundary (an interface that crosses the cell, as
+//! `kind = "straight_interface"` makes): the node and its duplicate then both sit on the
+//! side, and [`find_boundary_nodes_split`] orders and pairs them by the side of the
+//! interface they belong to. Whether the sides still match for periodic conditions is
+//! reported in [`crate::mesh::BoundaryNodes::sides_match`] (an inclusion that touches one
+//! side only leaves an unpaired duplicate there, and periodic conditions are refused).
 
 use std::collections::HashMap;
 
-use super::boundary::find_boundary_nodes;
+use super::boundary::{find_boundary_nodes, find_boundary_nodes_split};
 use super::model::{InterfaceElement, Mesh, Phase, PhaseMesh};
 use crate::error::{Error, Result};
 
@@ -71,22 +78,12 @@ pub fn insert_itz(phase_mesh: PhaseMesh, width: f64, height: f64) -> Result<Mesh
 
     // One duplicate per ITZ node, for the matrix side.
     let mut duplicate: HashMap<usize, usize> = HashMap::new();
-    let tol = 1e-9 * width.max(height);
     for &(a, b) in &itz_edges {
         for n in [a, b] {
-            if duplicate.contains_key(&n) {
-                continue;
+            if let std::collections::hash_map::Entry::Vacant(slot) = duplicate.entry(n) {
+                slot.insert(nodes.len());
+                nodes.push(nodes[n]);
             }
-            let [x, y] = nodes[n];
-            if x.abs() < tol || (x - width).abs() < tol || y.abs() < tol || (y - height).abs() < tol
-            {
-                return Err(Error::Mesh(format!(
-                    "an inclusion touches the cell boundary at ({x}, {y}); ITZ nodes on the \
-                     boundary would break periodic node matching"
-                )));
-            }
-            duplicate.insert(n, nodes.len());
-            nodes.push([x, y]);
         }
     }
     for tri in triangles.iter_mut().filter(|t| t.phase == Phase::Matrix) {
@@ -112,7 +109,7 @@ pub fn insert_itz(phase_mesh: PhaseMesh, width: f64, height: f64) -> Result<Mesh
         })
         .collect();
 
-    let boundary = find_boundary_nodes(&nodes, width, height)?;
+    let boundary = find_boundary_nodes_split(&nodes, &triangles, width, height)?;
     Ok(Mesh {
         width,
         height,

@@ -9,5 +9,5 @@ pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
 pub use schema::{
     BoundaryKind, BoundarySpec, CellSpec, EffectsSpec, ElasticSpec, Explicit, ExplicitInclusion,
     GeometrySpec, GmshSpec, InterfaceQuadratureSpec, ItzSpec, MaterialsSpec, MeshSpec, Orientation,
-    PathSegment, PenaltySpec, RandomSpec, ShapeKind, SolverSpec,
+    PathSegment, PenaltySpec, RandomSpec, ShapeKind, SolverSpec, StraightInterfaceSpec,
 };

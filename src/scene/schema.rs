@@ -50,6 +50,9 @@ pub enum GeometrySpec {
     Explicit(Explicit),
     /// A Gmsh mesh file whose physical groups name the phases.
     Gmsh(GmshSpec),
+    /// One straight vertical interface over the full height of the cell (closed-form
+    /// verification): aggregate on the left of it, matrix on the right.
+    StraightInterface(StraightInterfaceSpec),
 }
 
 impl<'de> Deserialize<'de> for GeometrySpec {
@@ -88,9 +91,10 @@ impl<'de> Deserialize<'de> for GeometrySpec {
             "random" => variant(table).map(GeometrySpec::Random),
             "explicit" => variant(table).map(GeometrySpec::Explicit),
             "gmsh" => variant(table).map(GeometrySpec::Gmsh),
+            "straight_interface" => variant(table).map(GeometrySpec::StraightInterface),
             other => Err(D::Error::custom(format!(
                 "key `geometry.kind`: unknown kind `{other}`, expected one of \
-                 `homogeneous`, `random`, `explicit`, `gmsh`"
+                 `homogeneous`, `random`, `explicit`, `gmsh`, `straight_interface`"
             ))),
         }
     }
@@ -190,6 +194,18 @@ pub struct GmshSpec {
     pub matrix: String,
     /// Physical group names that are inclusions (aggregates).
     pub inclusions: Vec<String>,
+}
+
+/// `kind = "straight_interface"`: the cell cut by the vertical line `x = x` from the
+/// bottom to the top side. The part `x' < x` is the aggregate phase, the part `x' > x` the
+/// matrix; ITZ elements along the line have their normal along `+x`. Their nodes lie on
+/// the bottom and top sides, where periodic pairing matches the copies on the same side
+/// of the line.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StraightInterfaceSpec {
+    /// Position of the interface, `0 < x < width`.
+    pub x: f64,
 }
 
 /// `[mesh]`.

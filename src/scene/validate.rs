@@ -77,6 +77,18 @@ impl SceneSpec {
                 }
                 true
             }
+            GeometrySpec::StraightInterface(s) => {
+                if !(s.x.is_finite() && s.x > 0.0 && s.x < w) {
+                    return Err(Error::scene(
+                        "geometry.x",
+                        format!(
+                            "the interface must cut the cell: 0 < x < {w} (cell.size[0]), got {}",
+                            s.x
+                        ),
+                    ));
+                }
+                true
+            }
         };
 
         let m = &self.mesh;
