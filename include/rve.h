@@ -24,7 +24,8 @@
 
 
 // Status code of a C call. Numbers are stable and never reused; a retired code stays
-// here as a comment.
+// here as a comment. `rve_status_message` gives a static description of each code;
+// `rve_last_error` gives the detailed message of the last failed call on this thread.
 typedef enum RveStatus {
   // Success.
   RVE_STATUS_OK = 0,
@@ -32,18 +33,295 @@ typedef enum RveStatus {
   RVE_STATUS_NULL_ARGUMENT = 1,
   // The scene could not be read, parsed or validated.
   RVE_STATUS_BAD_SCENE = 2,
-  // Meshing or mesh import failed.
+  // The microstructure could not be placed, meshed or imported.
   RVE_STATUS_MESH_FAILED = 3,
+  // The handle is 0 where an instance is required, was freed, or never came from
+  // `rve_init_*` in this process.
+  RVE_STATUS_BAD_HANDLE = 4,
+  // A strain component is NaN or infinite.
+  RVE_STATUS_NON_FINITE_STRAIN = 5,
+  // A strain component exceeds the model's bound (`|eps| > 0.1`: not a small strain).
+  RVE_STATUS_ABSURD_STRAIN = 6,
+  // The RVE solver failed even after sub-stepping. The committed state is unchanged;
+  // retry with a smaller increment (`RveInfo::suggested_step_ratio`).
+  RVE_STATUS_SOLVER_FAILED = 7,
+  // `rve_commit` without a successful `rve_update` since the last commit/revert/reset.
+  RVE_STATUS_NO_TRIAL = 8,
+  // The instance is in use by another thread right now (one instance, one thread at a
+  // time). Nothing was done; the instance is intact.
+  RVE_STATUS_INSTANCE_BUSY = 9,
+  // An argument has a bad value (unknown tangent request, length overflow, ...).
+  RVE_STATUS_INVALID_ARGUMENT = 10,
+  // The output buffer is too small; the required size was written where documented.
+  RVE_STATUS_BUFFER_TOO_SMALL = 11,
+  // State bytes are not a mesorve state (bad magic, truncated or undecodable).
+  RVE_STATUS_BAD_STATE = 12,
+  // State bytes were written in a state format this library does not read.
+  RVE_STATUS_STATE_VERSION = 13,
+  // State bytes belong to a model of another size (another scene).
+  RVE_STATUS_STATE_MISMATCH = 14,
+  // At least one item of `rve_update_batch` failed; see its `statuses` array.
+  RVE_STATUS_BATCH_FAILED = 15,
+  // An internal invariant was violated (a bug: please report it).
+  RVE_STATUS_INTERNAL = 98,
   // A Rust panic was caught at the C boundary (a bug: please report it).
   RVE_STATUS_PANIC = 99,
 } RveStatus;
+
+// What tangent `rve_update` returns (passed as an `int32_t`).
+typedef enum RveTangentRequest {
+  // The consistent homogenized tangent `d stress / d strain` of the converged trial.
+  RVE_TANGENT_REQUEST_CONSISTENT = 0,
+  // No tangent: stress only (cheaper); `tangent` may be NULL and is not written.
+  RVE_TANGENT_REQUEST_NONE = 1,
+  // The elastic tangent of the virgin RVE (shared by the model, costs nothing).
+  RVE_TANGENT_REQUEST_ELASTIC = 2,
+} RveTangentRequest;
+
+// How far to trust an update (MGIS-style).
+typedef enum RveReliability {
+  // The update failed; only `suggested_step_ratio` is meaningful.
+  RVE_RELIABILITY_FAILED = 0,
+  // Converged to the scene's tolerance in one step.
+  RVE_RELIABILITY_RELIABLE = 1,
+  // Converged to the scene's tolerance, but only after bisecting the increment
+  // (`substeps > 1`): the host's increments are large for this material state.
+  RVE_RELIABILITY_SUBSTEPPED = 2,
+} RveReliability;
+
+// An RVE instance handle: a 64-bit integer id into a process-wide table, not a pointer.
+//
+// Why an id: it fits a Fortran `integer(c_int64_t)` and, being in `[2^32, 2^52)`, is
+// stored exactly in a `double` (a UMAT STATEV slot); and a stale or foreign value can
+// be checked instead of dereferenced. Every id carries a generation counter, so a freed
+// id never becomes valid again: using it gives `RVE_STATUS_BAD_HANDLE`, never undefined
+// behaviour. 0 is never a valid handle (`rve_free(0)` is a no-op). Ids are valid in the
+// process that created them only (save the state bytes to move an instance).
+typedef int64_t RveHandle;
+
+// Extra outputs of `rve_update_ex`.
+typedef struct RveInfo {
+  // Newton corrections, summed over sub-steps.
+  uint32_t iterations;
+  // Accepted sub-steps (1 when the increment converged in one go).
+  uint32_t substeps;
+  // Numeric factorizations of the RVE stiffness, including the tangent's.
+  uint32_t factorizations;
+  // An `RveReliability` value.
+  int32_t reliability;
+  // Suggested ratio of the next macro increment to this one (UMAT's PNEWDT): 1.0 on
+  // success, < 1 after a solver failure.
+  double suggested_step_ratio;
+  // Out-of-plane stress `s_zz` (plane strain; 0 in plane stress), stress units.
+  double s_zz;
+} RveInfo;
 
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
 
+// Trial-updates `n` distinct instances: item `k` is `rve_update(handles[k],
+// &strains[3k], &stresses[3k], &tangents[9k], tangent_request)`, with the same units,
+// conventions and per-item rules (each item's outputs written only when `statuses[k]`
+// is `RVE_STATUS_OK`). `statuses[k]` receives each item's status. `tangents` may be
+// NULL only with `RVE_TANGENT_REQUEST_NONE`. Commit each item with `rve_commit`.
+//
+// `nthreads`: 1 runs on the calling thread; `k > 1` uses a pool of `k` threads created
+// on first use and kept for the process; 0 uses rayon's global pool (one thread per
+// core, or `RAYON_NUM_THREADS`). The handles must be distinct: a handle given twice may
+// get `INSTANCE_BUSY`. Results do not depend on `nthreads` (bit-identical).
+//
+// Returns `OK` when every item succeeded, `BATCH_FAILED` when at least one failed (its
+// message, prefixed with the item index, is the thread's last error), and
+// `NULL_ARGUMENT`, `INVALID_ARGUMENT` or `PANIC` when nothing was run (then
+// `statuses` is not written).
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_update_batch(const RveHandle *handles,
+                          size_t n,
+                          const double *strains,
+                          double *stresses,
+                          double *tangents,
+                          uint32_t *statuses,
+                          int32_t tangent_request,
+                          size_t nthreads);
+
+// Copies the detailed message of the last failed `rve_*` call on the calling thread
+// into `buf` (at most `len` bytes, always NUL-terminated when `len > 0`, truncated if
+// needed), and returns the full message length in bytes without the NUL. Pass
+// `buf = NULL, len = 0` to query the length. The message is "" after a successful call.
+// Every `rve_*` function except this one, `rve_version*` and `rve_status_message`
+// overwrites it. Never fails.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+size_t rve_last_error(char *buf, size_t len);
+
+// Creates an instance from the scene file `path` (NUL-terminated; TOML) and writes its
+// handle to `*out_handle`. Relative paths inside the scene (`geometry.file`) resolve
+// against the scene file's directory. Instances of one scene share one immutable model
+// (mesh, factorization pattern, elastic tangent): the scene is meshed once per process
+// while any of its instances lives. The new instance is in the virgin state.
+//
+// Returns `RVE_STATUS_OK`, `NULL_ARGUMENT`, `BAD_SCENE` (unreadable, unparsable or
+// invalid scene), `MESH_FAILED`, or `PANIC`. `*out_handle` is written only on success.
+// The caller owns the instance and releases it with `rve_free`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_init_file(const char *path, RveHandle *out_handle);
+
+// Creates an instance from scene text `toml_text` (NUL-terminated UTF-8 TOML, the
+// format of a scene file). Relative paths inside it resolve against `base_dir`
+// (NUL-terminated), or against the working directory when `base_dir` is NULL.
+// Instances created from the same text and base directory share one model.
+//
+// Returns as `rve_init_file`; `*out_handle` is written only on success.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_init_text(const char *toml_text, const char *base_dir, RveHandle *out_handle);
+
+// Creates a new virgin instance of the same model as `h` (no parsing, no meshing).
+// `*out_handle` is written only on success.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_clone_model(RveHandle h, RveHandle *out_handle);
+
+// Trial update with full outputs. Solves the RVE at the macro strain
+// `strain[3] = [eps_xx, eps_yy, gamma_xy]` (Voigt order, ENGINEERING shear
+// `gamma_xy = 2 eps_xy`, dimensionless) starting from the instance's committed state.
+// It never changes the committed state; calling it twice with the same strain gives
+// bit-identical results. `rve_commit` accepts it, a new `rve_update` replaces it.
+//
+// Outputs (caller-owned):
+// - `stress[3]` = `[s_xx, s_yy, s_xy]` in the scene's stress units (paper: N/mm^2);
+// - `tangent[9]`, row-major: `tangent[3*i + j] = d stress_i / d strain_j`. A Fortran
+//   caller reading it as `D(3,3)` sees the transpose (equal when symmetric). Its content
+//   follows `tangent_request` (an `RveTangentRequest`): consistent, elastic, or not
+//   written at all (`NONE`; then `tangent` may be NULL);
+// - `info` (may be NULL): iterations, sub-steps, reliability, PNEWDT and `s_zz`.
+//
+// `stress` and `tangent` are written only on success. `info` is written on success and
+// on `RVE_STATUS_SOLVER_FAILED` (reliability `FAILED`, `suggested_step_ratio` < 1);
+// otherwise it is left untouched.
+//
+// Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`, `INVALID_ARGUMENT` (tangent request),
+// `NON_FINITE_STRAIN`, `ABSURD_STRAIN` (`|component| > 0.1`), `SOLVER_FAILED`,
+// `INSTANCE_BUSY` (another thread is using this instance) or `PANIC`. After any failure
+// there is no trial to commit; the committed state is unchanged.
+//
+// Starts no threads. Distinct instances may be updated concurrently from any threads;
+// each thread keeps one workspace per model.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_update_ex(RveHandle h,
+                       const double *strain,
+                       double *stress,
+                       double *tangent,
+                       int32_t tangent_request,
+                       struct RveInfo *info);
+
+// Trial update: `rve_update_ex` without `info`. Same units, conventions, statuses and
+// rules (stress and tangent written only on success; `tangent` may be NULL only with
+// `RVE_TANGENT_REQUEST_NONE`).
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_update(RveHandle h,
+                    const double *strain,
+                    double *stress,
+                    double *tangent,
+                    int32_t tangent_request);
+
+// Accepts the last successful trial (`rve_update`) as the instance's new committed
+// state: the end of a macro increment. Returns `OK`, `BAD_HANDLE`, `NO_TRIAL` (no
+// successful update since the last commit, revert, reset or load; nothing changes),
+// `INSTANCE_BUSY` or `PANIC`.
+uint32_t rve_commit(RveHandle h);
+
+// Discards the last trial; the committed state stays. Returns `OK`, `BAD_HANDLE`,
+// `INSTANCE_BUSY` or `PANIC`.
+uint32_t rve_revert(RveHandle h);
+
+// Returns the instance to the virgin state (zero strain, undamaged) and discards the
+// trial. Returns `OK`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`.
+uint32_t rve_reset(RveHandle h);
+
+// Frees an instance; its handle never becomes valid again. `rve_free(0)` is a no-op
+// that returns `OK`. Returns `OK`, `BAD_HANDLE` (already freed or foreign),
+// `INSTANCE_BUSY` (another thread is using it; not freed) or `PANIC`. The model is
+// released with the last instance of its scene.
+uint32_t rve_free(RveHandle h);
+
+// Writes to `*size` the number of bytes `rve_state_save` needs for the instance's
+// committed state (the same for every state of one scene). Returns `OK`,
+// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`; `*size` written on success.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_state_size(RveHandle h, size_t *size);
+
+// Serialises the instance's committed state (not the trial) into `buf[0..len)`, in a
+// versioned byte format (checkpoint/restart; see `rve_state_load`), and writes the
+// byte count to `*written`. When `len` is too small nothing is written to `buf`,
+// `*written` receives the required size and the status is `BUFFER_TOO_SMALL`.
+// Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`, `BUFFER_TOO_SMALL`, `INSTANCE_BUSY` or
+// `PANIC`. The caller owns `buf`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_state_save(RveHandle h, uint8_t *buf, size_t len, size_t *written);
+
+// Replaces the instance's committed state by the state in `buf[0..len)` (written by
+// `rve_state_save` for an instance of the same scene) and discards the trial. Refused,
+// with the instance unchanged, when the bytes are not a state (`BAD_STATE`), come from
+// an unsupported format version (`STATE_VERSION`) or from a model of another scene
+// (`STATE_MISMATCH`). Also `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_state_load(RveHandle h, const uint8_t *buf, size_t len);
+
+// Writes to `*n` the number of increments of the scene's strain path (`[[path]]`
+// segments; 0 when the scene has none). Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE` or
+// `PANIC`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_path_len(RveHandle h, size_t *n);
+
+// Writes to `strain[3]` the macro strain of increment `i` (0-based, `i < rve_path_len`)
+// of the scene's strain path, exactly as `rve run` computes it (Voigt order, engineering
+// shear). Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`, `INVALID_ARGUMENT` (`i` out of
+// range) or `PANIC`; `strain` written only on success.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_path_point(RveHandle h, size_t i, double *strain);
+
+// Number of RVE models (meshes) this process has built through `rve_init_*`: a
+// diagnostic showing that instances of one scene share one model.
+uint64_t rve_model_builds(void);
+
 // Returns a static NUL-terminated description of a status code (`RveStatus` value);
 // unknown codes give "unknown status code". Never NULL; the caller must not free it.
+// For the detailed message of the last failure on this thread see `rve_last_error`.
 const char *rve_status_message(uint32_t code);
 
 // Returns the library version as a static NUL-terminated string `"major.minor.patch"`.
@@ -52,6 +330,10 @@ const char *rve_version(void);
 
 // Returns the version packed as `major * 10000 + minor * 100 + patch`.
 uint32_t rve_version_number(void);
+
+// Returns the ABI version of the library (the soname suffix). A host compiled against
+// a header whose `RVE_ABI_VERSION` differs must not use this library.
+uint32_t rve_abi_version(void);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -1,12 +1,41 @@
 //! The C interface: a thin translation layer over the safe Rust API. This is the only
 //! module with `unsafe` code or `extern "C"` functions.
+//!
+//! Conventions (also in the README and the header): handle first, then inputs, then
+//! outputs; every function returns an `RveStatus` as `uint32_t` (except queries that
+//! cannot fail); outputs are written only on success; every pointer is checked; every
+//! function runs inside a panic boundary; the detailed message of the last failure on a
+//! thread is `rve_last_error`.
 
+mod batch;
+mod boundary;
+mod cache;
+mod instance;
+mod registry;
+mod state_io;
 mod status;
 mod version;
+mod workspace;
 
-pub use status::{rve_status_message, RveStatus};
-pub use version::{rve_version, rve_version_number};
+pub use batch::rve_update_batch;
+pub use boundary::rve_last_error;
+pub use cache::model_builds;
+pub use instance::{
+    rve_clone_model, rve_commit, rve_free, rve_init_file, rve_init_text, rve_model_builds,
+    rve_path_len, rve_path_point, rve_reset, rve_revert, rve_state_load, rve_state_save,
+    rve_state_size, rve_update, rve_update_ex, RveHandle, RveInfo, RveReliability,
+    RveTangentRequest,
+};
+pub use registry::live_instances;
+pub use state_io::STATE_FORMAT_VERSION;
+pub use status::{rve_status_message, RveStatus, ALL_STATUSES};
+pub use version::{rve_abi_version, rve_version, rve_version_number};
 
 /// ABI version: the suffix of the soname `librve.so.<ABI_VERSION>`, also the header's
 /// `RVE_ABI_VERSION`. Bump on any incompatible change of the C interface.
 pub const ABI_VERSION: u32 = 0;
+
+/// The detailed message of the last failed call on this thread (Rust tests).
+pub fn last_error_message() -> String {
+    boundary::last_error()
+}

@@ -20,3 +20,10 @@ pub extern "C" fn rve_version_number() -> u32 {
         + parse(env!("CARGO_PKG_VERSION_MINOR")) * 100
         + parse(env!("CARGO_PKG_VERSION_PATCH"))
 }
+
+/// Returns the ABI version of the library (the soname suffix). A host compiled against
+/// a header whose `RVE_ABI_VERSION` differs must not use this library.
+#[no_mangle]
+pub extern "C" fn rve_abi_version() -> u32 {
+    super::ABI_VERSION
+}

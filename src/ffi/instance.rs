@@ -1,0 +1,506 @@
+//! The material-point entry points: init, update, commit, revert, reset, free, state
+//! save/load and the scene's strain path.
+
+use std::ffi::{c_char, CStr};
+use std::path::Path;
+use std::sync::Arc;
+
+use super::boundary::{guard, out, slice, slice_mut, Failure, FfiResult};
+use super::cache;
+use super::registry::{self, Entry};
+use super::state_io;
+use super::status::RveStatus;
+use super::workspace::with_workspace;
+use crate::model::{Model, Response};
+use crate::solver::TangentRequest;
+
+/// An RVE instance handle: a 64-bit integer id into a process-wide table, not a pointer.
+///
+/// Why an id: it fits a Fortran `integer(c_int64_t)` and, being in `[2^32, 2^52)`, is
+/// stored exactly in a `double` (a UMAT STATEV slot); and a stale or foreign value can
+/// be checked instead of dereferenced. Every id carries a generation counter, so a freed
+/// id never becomes valid again: using it gives `RVE_STATUS_BAD_HANDLE`, never undefined
+/// behaviour. 0 is never a valid handle (`rve_free(0)` is a no-op). Ids are valid in the
+/// process that created them only (save the state bytes to move an instance).
+pub type RveHandle = i64;
+
+/// What tangent `rve_update` returns (passed as an `int32_t`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RveTangentRequest {
+    /// The consistent homogenized tangent `d stress / d strain` of the converged trial.
+    Consistent = 0,
+    /// No tangent: stress only (cheaper); `tangent` may be NULL and is not written.
+    None = 1,
+    /// The elastic tangent of the virgin RVE (shared by the model, costs nothing).
+    Elastic = 2,
+}
+
+impl RveTangentRequest {
+    fn from_i32(v: i32) -> FfiResult<Self> {
+        Ok(match v {
+            0 => RveTangentRequest::Consistent,
+            1 => RveTangentRequest::None,
+            2 => RveTangentRequest::Elastic,
+            _ => {
+                return Err(Failure::new(
+                    RveStatus::InvalidArgument,
+                    format!("tangent_request {v} is not an RveTangentRequest (0, 1 or 2)"),
+                ))
+            }
+        })
+    }
+}
+
+/// How far to trust an update (MGIS-style).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RveReliability {
+    /// The update failed; only `suggested_step_ratio` is meaningful.
+    Failed = 0,
+    /// Converged to the scene's tolerance in one step.
+    Reliable = 1,
+    /// Converged to the scene's tolerance, but only after bisecting the increment
+    /// (`substeps > 1`): the host's increments are large for this material state.
+    Substepped = 2,
+}
+
+/// Extra outputs of `rve_update_ex`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RveInfo {
+    /// Newton corrections, summed over sub-steps.
+    pub iterations: u32,
+    /// Accepted sub-steps (1 when the increment converged in one go).
+    pub substeps: u32,
+    /// Numeric factorizations of the RVE stiffness, including the tangent's.
+    pub factorizations: u32,
+    /// An `RveReliability` value.
+    pub reliability: i32,
+    /// Suggested ratio of the next macro increment to this one (UMAT's PNEWDT): 1.0 on
+    /// success, < 1 after a solver failure.
+    pub suggested_step_ratio: f64,
+    /// Out-of-plane stress `s_zz` (plane strain; 0 in plane stress), stress units.
+    pub s_zz: f64,
+}
+
+impl RveInfo {
+    fn from_response(r: &Response) -> Self {
+        RveInfo {
+            iterations: r.report.iterations,
+            substeps: r.report.substeps,
+            factorizations: r.report.factorizations,
+            reliability: if r.report.substeps > 1 {
+                RveReliability::Substepped as i32
+            } else {
+                RveReliability::Reliable as i32
+            },
+            suggested_step_ratio: 1.0,
+            s_zz: r.s_zz,
+        }
+    }
+
+    fn failed(step_ratio: f64) -> Self {
+        RveInfo {
+            iterations: 0,
+            substeps: 0,
+            factorizations: 0,
+            reliability: RveReliability::Failed as i32,
+            suggested_step_ratio: step_ratio,
+            s_zz: 0.0,
+        }
+    }
+}
+
+/// Safe core of an update, shared with the batch entry point.
+pub(crate) fn update_entry(
+    entry: &Arc<Entry>,
+    strain: [f64; 3],
+    request: RveTangentRequest,
+) -> FfiResult<Response> {
+    let mut point = entry.lock()?;
+    let solve_request = match request {
+        RveTangentRequest::Consistent => TangentRequest::Consistent,
+        RveTangentRequest::None | RveTangentRequest::Elastic => TangentRequest::None,
+    };
+    let model: &Arc<Model> = &entry.model;
+    let mut r = with_workspace(model, |ws| point.update(model, strain, ws, solve_request))?;
+    if request == RveTangentRequest::Elastic {
+        r.tangent = model.elastic_tangent;
+    }
+    Ok(r)
+}
+
+fn new_instance(model: Arc<Model>, handle: &mut RveHandle) -> FfiResult {
+    *handle = registry::insert(Entry::new(model))?;
+    Ok(())
+}
+
+unsafe fn c_str<'a>(p: *const c_char, name: &str) -> FfiResult<&'a CStr> {
+    if p.is_null() {
+        Err(Failure::null(name))
+    } else {
+        Ok(CStr::from_ptr(p))
+    }
+}
+
+#[cfg(unix)]
+fn c_path(s: &CStr) -> FfiResult<&Path> {
+    use std::os::unix::ffi::OsStrExt;
+    Ok(Path::new(std::ffi::OsStr::from_bytes(s.to_bytes())))
+}
+
+#[cfg(not(unix))]
+fn c_path(s: &CStr) -> FfiResult<&Path> {
+    s.to_str()
+        .map(Path::new)
+        .map_err(|_| Failure::new(RveStatus::BadScene, "the path is not UTF-8"))
+}
+
+/// Creates an instance from the scene file `path` (NUL-terminated; TOML) and writes its
+/// handle to `*out_handle`. Relative paths inside the scene (`geometry.file`) resolve
+/// against the scene file's directory. Instances of one scene share one immutable model
+/// (mesh, factorization pattern, elastic tangent): the scene is meshed once per process
+/// while any of its instances lives. The new instance is in the virgin state.
+///
+/// Returns `RVE_STATUS_OK`, `NULL_ARGUMENT`, `BAD_SCENE` (unreadable, unparsable or
+/// invalid scene), `MESH_FAILED`, or `PANIC`. `*out_handle` is written only on success.
+/// The caller owns the instance and releases it with `rve_free`.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_init_file(path: *const c_char, out_handle: *mut RveHandle) -> u32 {
+    guard("rve_init_file", || {
+        let path = c_path(c_str(path, "path")?)?;
+        let out_handle = out(out_handle, "out_handle")?;
+        new_instance(cache::model_for_file(path)?, out_handle)
+    }) as u32
+}
+
+/// Creates an instance from scene text `toml_text` (NUL-terminated UTF-8 TOML, the
+/// format of a scene file). Relative paths inside it resolve against `base_dir`
+/// (NUL-terminated), or against the working directory when `base_dir` is NULL.
+/// Instances created from the same text and base directory share one model.
+///
+/// Returns as `rve_init_file`; `*out_handle` is written only on success.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_init_text(
+    toml_text: *const c_char,
+    base_dir: *const c_char,
+    out_handle: *mut RveHandle,
+) -> u32 {
+    guard("rve_init_text", || {
+        let text = c_str(toml_text, "toml_text")?
+            .to_str()
+            .map_err(|e| Failure::new(RveStatus::BadScene, format!("scene text: {e}")))?;
+        let base = if base_dir.is_null() {
+            None
+        } else {
+            Some(c_path(CStr::from_ptr(base_dir))?)
+        };
+        let out_handle = out(out_handle, "out_handle")?;
+        new_instance(cache::model_for_text(text, base)?, out_handle)
+    }) as u32
+}
+
+/// Creates a new virgin instance of the same model as `h` (no parsing, no meshing).
+/// `*out_handle` is written only on success.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_clone_model(h: RveHandle, out_handle: *mut RveHandle) -> u32 {
+    guard("rve_clone_model", || {
+        let out_handle = out(out_handle, "out_handle")?;
+        let entry = registry::get(h)?;
+        new_instance(entry.model.clone(), out_handle)
+    }) as u32
+}
+
+/// Trial update with full outputs. Solves the RVE at the macro strain
+/// `strain[3] = [eps_xx, eps_yy, gamma_xy]` (Voigt order, ENGINEERING shear
+/// `gamma_xy = 2 eps_xy`, dimensionless) starting from the instance's committed state.
+/// It never changes the committed state; calling it twice with the same strain gives
+/// bit-identical results. `rve_commit` accepts it, a new `rve_update` replaces it.
+///
+/// Outputs (caller-owned):
+/// - `stress[3]` = `[s_xx, s_yy, s_xy]` in the scene's stress units (paper: N/mm^2);
+/// - `tangent[9]`, row-major: `tangent[3*i + j] = d stress_i / d strain_j`. A Fortran
+///   caller reading it as `D(3,3)` sees the transpose (equal when symmetric). Its content
+///   follows `tangent_request` (an `RveTangentRequest`): consistent, elastic, or not
+///   written at all (`NONE`; then `tangent` may be NULL);
+/// - `info` (may be NULL): iterations, sub-steps, reliability, PNEWDT and `s_zz`.
+///
+/// `stress` and `tangent` are written only on success. `info` is written on success and
+/// on `RVE_STATUS_SOLVER_FAILED` (reliability `FAILED`, `suggested_step_ratio` < 1);
+/// otherwise it is left untouched.
+///
+/// Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`, `INVALID_ARGUMENT` (tangent request),
+/// `NON_FINITE_STRAIN`, `ABSURD_STRAIN` (`|component| > 0.1`), `SOLVER_FAILED`,
+/// `INSTANCE_BUSY` (another thread is using this instance) or `PANIC`. After any failure
+/// there is no trial to commit; the committed state is unchanged.
+///
+/// Starts no threads. Distinct instances may be updated concurrently from any threads;
+/// each thread keeps one workspace per model.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_update_ex(
+    h: RveHandle,
+    strain: *const f64,
+    stress: *mut f64,
+    tangent: *mut f64,
+    tangent_request: i32,
+    info: *mut RveInfo,
+) -> u32 {
+    guard("rve_update_ex", || {
+        let request = RveTangentRequest::from_i32(tangent_request)?;
+        let strain: [f64; 3] = slice(strain, 3, "strain")?.try_into().expect("3");
+        let stress = slice_mut(stress, 3, "stress")?;
+        let tangent = if request == RveTangentRequest::None {
+            None
+        } else {
+            Some(slice_mut(tangent, 9, "tangent")?)
+        };
+        let entry = registry::get(h)?;
+        match update_entry(&entry, strain, request) {
+            Ok(r) => {
+                stress.copy_from_slice(&r.stress);
+                if let Some(t) = tangent {
+                    t.copy_from_slice(&r.tangent);
+                }
+                if let Some(info) = info.as_mut() {
+                    *info = RveInfo::from_response(&r);
+                }
+                Ok(())
+            }
+            Err(f) => {
+                if let (Some(ratio), Some(info)) = (f.step_ratio, info.as_mut()) {
+                    *info = RveInfo::failed(ratio);
+                }
+                Err(f)
+            }
+        }
+    }) as u32
+}
+
+/// Trial update: `rve_update_ex` without `info`. Same units, conventions, statuses and
+/// rules (stress and tangent written only on success; `tangent` may be NULL only with
+/// `RVE_TANGENT_REQUEST_NONE`).
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_update(
+    h: RveHandle,
+    strain: *const f64,
+    stress: *mut f64,
+    tangent: *mut f64,
+    tangent_request: i32,
+) -> u32 {
+    rve_update_ex(
+        h,
+        strain,
+        stress,
+        tangent,
+        tangent_request,
+        std::ptr::null_mut(),
+    )
+}
+
+fn with_point(
+    name: &str,
+    h: RveHandle,
+    f: impl FnOnce(&Arc<Entry>, &mut registry::Point) -> FfiResult,
+) -> u32 {
+    guard(name, || {
+        let entry = registry::get(h)?;
+        let mut point = entry.lock()?;
+        f(&entry, &mut point)
+    }) as u32
+}
+
+/// Accepts the last successful trial (`rve_update`) as the instance's new committed
+/// state: the end of a macro increment. Returns `OK`, `BAD_HANDLE`, `NO_TRIAL` (no
+/// successful update since the last commit, revert, reset or load; nothing changes),
+/// `INSTANCE_BUSY` or `PANIC`.
+#[no_mangle]
+pub extern "C" fn rve_commit(h: RveHandle) -> u32 {
+    with_point("rve_commit", h, |_, p| Ok(p.commit()?))
+}
+
+/// Discards the last trial; the committed state stays. Returns `OK`, `BAD_HANDLE`,
+/// `INSTANCE_BUSY` or `PANIC`.
+#[no_mangle]
+pub extern "C" fn rve_revert(h: RveHandle) -> u32 {
+    with_point("rve_revert", h, |_, p| {
+        p.has_trial = false;
+        Ok(())
+    })
+}
+
+/// Returns the instance to the virgin state (zero strain, undamaged) and discards the
+/// trial. Returns `OK`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`.
+#[no_mangle]
+pub extern "C" fn rve_reset(h: RveHandle) -> u32 {
+    with_point("rve_reset", h, |e, p| {
+        *p = registry::Point::new(&e.model);
+        Ok(())
+    })
+}
+
+/// Frees an instance; its handle never becomes valid again. `rve_free(0)` is a no-op
+/// that returns `OK`. Returns `OK`, `BAD_HANDLE` (already freed or foreign),
+/// `INSTANCE_BUSY` (another thread is using it; not freed) or `PANIC`. The model is
+/// released with the last instance of its scene.
+#[no_mangle]
+pub extern "C" fn rve_free(h: RveHandle) -> u32 {
+    guard("rve_free", || {
+        if h != 0 {
+            registry::remove(h)?;
+        }
+        Ok(())
+    }) as u32
+}
+
+/// Writes to `*size` the number of bytes `rve_state_save` needs for the instance's
+/// committed state (the same for every state of one scene). Returns `OK`,
+/// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`; `*size` written on success.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_state_size(h: RveHandle, size: *mut usize) -> u32 {
+    guard("rve_state_size", || {
+        let size = out(size, "size")?;
+        let entry = registry::get(h)?;
+        let point = entry.lock()?;
+        *size = state_io::encoded_len(&point.committed)?;
+        Ok(())
+    }) as u32
+}
+
+/// Serialises the instance's committed state (not the trial) into `buf[0..len)`, in a
+/// versioned byte format (checkpoint/restart; see `rve_state_load`), and writes the
+/// byte count to `*written`. When `len` is too small nothing is written to `buf`,
+/// `*written` receives the required size and the status is `BUFFER_TOO_SMALL`.
+/// Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`, `BUFFER_TOO_SMALL`, `INSTANCE_BUSY` or
+/// `PANIC`. The caller owns `buf`.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_state_save(
+    h: RveHandle,
+    buf: *mut u8,
+    len: usize,
+    written: *mut usize,
+) -> u32 {
+    guard("rve_state_save", || {
+        let written = out(written, "written")?;
+        let entry = registry::get(h)?;
+        let bytes = {
+            let point = entry.lock()?;
+            state_io::encode(&entry.model, &point.committed)?
+        };
+        if bytes.len() > len {
+            *written = bytes.len();
+            return Err(Failure::new(
+                RveStatus::BufferTooSmall,
+                format!(
+                    "the state needs {} bytes, the buffer has {len}",
+                    bytes.len()
+                ),
+            ));
+        }
+        slice_mut(buf, bytes.len(), "buf")?.copy_from_slice(&bytes);
+        *written = bytes.len();
+        Ok(())
+    }) as u32
+}
+
+/// Replaces the instance's committed state by the state in `buf[0..len)` (written by
+/// `rve_state_save` for an instance of the same scene) and discards the trial. Refused,
+/// with the instance unchanged, when the bytes are not a state (`BAD_STATE`), come from
+/// an unsupported format version (`STATE_VERSION`) or from a model of another scene
+/// (`STATE_MISMATCH`). Also `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_state_load(h: RveHandle, buf: *const u8, len: usize) -> u32 {
+    guard("rve_state_load", || {
+        let bytes = slice(buf, len, "buf")?;
+        let entry = registry::get(h)?;
+        let state = state_io::decode(&entry.model, bytes)?;
+        let mut point = entry.lock()?;
+        point.committed = state;
+        point.has_trial = false;
+        Ok(())
+    }) as u32
+}
+
+/// Writes to `*n` the number of increments of the scene's strain path (`[[path]]`
+/// segments; 0 when the scene has none). Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE` or
+/// `PANIC`.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_path_len(h: RveHandle, n: *mut usize) -> u32 {
+    guard("rve_path_len", || {
+        let n = out(n, "n")?;
+        let entry = registry::get(h)?;
+        *n = crate::cli::path_points(&entry.model.scene.spec.path).len();
+        Ok(())
+    }) as u32
+}
+
+/// Writes to `strain[3]` the macro strain of increment `i` (0-based, `i < rve_path_len`)
+/// of the scene's strain path, exactly as `rve run` computes it (Voigt order, engineering
+/// shear). Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`, `INVALID_ARGUMENT` (`i` out of
+/// range) or `PANIC`; `strain` written only on success.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_path_point(h: RveHandle, i: usize, strain: *mut f64) -> u32 {
+    guard("rve_path_point", || {
+        let strain = slice_mut(strain, 3, "strain")?;
+        let entry = registry::get(h)?;
+        let points = crate::cli::path_points(&entry.model.scene.spec.path);
+        let p = points.get(i).ok_or_else(|| {
+            Failure::new(
+                RveStatus::InvalidArgument,
+                format!(
+                    "path increment {i} out of range (the path has {})",
+                    points.len()
+                ),
+            )
+        })?;
+        strain.copy_from_slice(p);
+        Ok(())
+    }) as u32
+}
+
+/// Number of RVE models (meshes) this process has built through `rve_init_*`: a
+/// diagnostic showing that instances of one scene share one model.
+#[no_mangle]
+pub extern "C" fn rve_model_builds() -> u64 {
+    cache::model_builds()
+}

@@ -1,0 +1,461 @@
+//! The C interface called from Rust: handles, statuses, trial semantics, state bytes,
+//! batch and threads. The same extern functions a C host calls.
+
+mod common;
+
+use std::ffi::CString;
+use std::ptr::{null, null_mut};
+
+use rve::ffi::*;
+
+const OK: u32 = RveStatus::Ok as u32;
+const CONSISTENT: i32 = RveTangentRequest::Consistent as i32;
+
+fn init_paper() -> RveHandle {
+    let path = CString::new(common::repo("scenes/paper_rve.toml").to_str().unwrap()).unwrap();
+    let mut h = 0;
+    assert_eq!(unsafe { rve_init_file(path.as_ptr(), &mut h) }, OK);
+    assert_ne!(h, 0);
+    h
+}
+
+fn init_text(text: &str) -> (u32, RveHandle) {
+    let text = CString::new(text).unwrap();
+    let mut h = 0;
+    let s = unsafe { rve_init_text(text.as_ptr(), null(), &mut h) };
+    (s, h)
+}
+
+fn update(h: RveHandle, strain: [f64; 3]) -> (u32, [f64; 3], [f64; 9]) {
+    let mut stress = [f64::NAN; 3];
+    let mut tangent = [f64::NAN; 9];
+    let s = unsafe {
+        rve_update(
+            h,
+            strain.as_ptr(),
+            stress.as_mut_ptr(),
+            tangent.as_mut_ptr(),
+            CONSISTENT,
+        )
+    };
+    (s, stress, tangent)
+}
+
+#[test]
+fn trial_commit_revert_and_bit_identical_repeats() {
+    let h = init_paper();
+    let e = [5e-5, 0.0, 0.0];
+    let (s1, sig1, d1) = update(h, e);
+    let (s2, sig2, d2) = update(h, e);
+    assert_eq!((s1, s2), (OK, OK));
+    assert_eq!(sig1.map(f64::to_bits), sig2.map(f64::to_bits));
+    assert_eq!(d1.map(f64::to_bits), d2.map(f64::to_bits));
+    assert!(sig1[0] > 0.0);
+    assert_eq!(rve_commit(h), OK);
+    assert_eq!(rve_commit(h), RveStatus::NoTrial as u32);
+    assert_eq!(rve_revert(h), OK);
+    assert_eq!(rve_reset(h), OK);
+    assert_eq!(rve_commit(h), RveStatus::NoTrial as u32);
+    // After reset the first update is the same as on a fresh instance.
+    let (_, sig3, _) = update(h, e);
+    assert_eq!(sig1.map(f64::to_bits), sig3.map(f64::to_bits));
+    assert_eq!(rve_free(h), OK);
+    assert_eq!(rve_free(h), RveStatus::BadHandle as u32);
+    assert_eq!(rve_free(0), OK);
+}
+
+#[test]
+fn matches_the_safe_api_and_info_and_requests() {
+    let h = init_paper();
+    let scene = common::scene("scenes/paper_rve.toml");
+    let model = std::sync::Arc::new(rve::Model::from_scene(&scene).unwrap());
+    let mut inst = rve::Instance::new(model.clone());
+    let mut ws = model.workspace();
+    let e = [4e-5, -1e-5, 1e-5];
+    let r = inst
+        .update(e, &mut ws, rve::TangentRequest::Consistent)
+        .unwrap();
+    let (mut stress, mut tangent) = ([0.0; 3], [0.0; 9]);
+    let mut info = RveInfo {
+        iterations: 0,
+        substeps: 0,
+        factorizations: 0,
+        reliability: -1,
+        suggested_step_ratio: 0.0,
+        s_zz: f64::NAN,
+    };
+    let s = unsafe {
+        rve_update_ex(
+            h,
+            e.as_ptr(),
+            stress.as_mut_ptr(),
+            tangent.as_mut_ptr(),
+            CONSISTENT,
+            &mut info,
+        )
+    };
+    assert_eq!(s, OK);
+    assert_eq!(stress.map(f64::to_bits), r.stress.map(f64::to_bits));
+    assert_eq!(tangent.map(f64::to_bits), r.tangent.map(f64::to_bits));
+    assert_eq!(info.iterations, r.report.iterations);
+    assert_eq!(info.substeps, r.report.substeps);
+    assert_eq!(info.suggested_step_ratio, 1.0);
+    assert_eq!(info.reliability, RveReliability::Reliable as i32);
+    assert_eq!(info.s_zz, r.s_zz);
+    // Stress only: tangent may be NULL and the stress is the same.
+    let mut s_only = [0.0; 3];
+    let st = unsafe {
+        rve_update(
+            h,
+            e.as_ptr(),
+            s_only.as_mut_ptr(),
+            null_mut(),
+            RveTangentRequest::None as i32,
+        )
+    };
+    assert_eq!(st, OK);
+    assert_eq!(s_only.map(f64::to_bits), r.stress.map(f64::to_bits));
+    // Elastic tangent.
+    let st = unsafe {
+        rve_update(
+            h,
+            e.as_ptr(),
+            s_only.as_mut_ptr(),
+            tangent.as_mut_ptr(),
+            RveTangentRequest::Elastic as i32,
+        )
+    };
+    assert_eq!(st, OK);
+    assert_eq!(tangent, model.elastic_tangent);
+    // Unknown request.
+    let st = unsafe { rve_update(h, e.as_ptr(), s_only.as_mut_ptr(), tangent.as_mut_ptr(), 7) };
+    assert_eq!(st, RveStatus::InvalidArgument as u32);
+    rve_free(h);
+}
+
+#[test]
+fn every_misuse_gets_its_status_and_writes_nothing() {
+    let h = init_paper();
+    let mut stress = [7.0; 3];
+    let mut tangent = [7.0; 9];
+    let mut call = |h: RveHandle, e: [f64; 3]| unsafe {
+        rve_update(
+            h,
+            e.as_ptr(),
+            stress.as_mut_ptr(),
+            tangent.as_mut_ptr(),
+            CONSISTENT,
+        )
+    };
+    assert_eq!(
+        call(h, [f64::NAN, 0.0, 0.0]),
+        RveStatus::NonFiniteStrain as u32
+    );
+    assert!(last_error_message().contains("not finite"));
+    assert_eq!(
+        call(h, [0.0, f64::INFINITY, 0.0]),
+        RveStatus::NonFiniteStrain as u32
+    );
+    assert_eq!(call(h, [0.0, 0.0, 0.5]), RveStatus::AbsurdStrain as u32);
+    assert_eq!(call(0, [0.0; 3]), RveStatus::BadHandle as u32);
+    assert_eq!(call(12345, [0.0; 3]), RveStatus::BadHandle as u32);
+    assert_eq!(call(h + (1 << 32), [0.0; 3]), RveStatus::BadHandle as u32);
+    assert_eq!(call(-h, [0.0; 3]), RveStatus::BadHandle as u32);
+    assert_eq!(stress, [7.0; 3]);
+    assert_eq!(tangent, [7.0; 9]);
+    assert_eq!(rve_commit(h), RveStatus::NoTrial as u32);
+    let s = unsafe { rve_update(h, null(), stress.as_mut_ptr(), null_mut(), CONSISTENT) };
+    assert_eq!(s, RveStatus::NullArgument as u32);
+    let s = unsafe {
+        rve_update(
+            h,
+            [0.0; 3].as_ptr(),
+            stress.as_mut_ptr(),
+            null_mut(),
+            CONSISTENT,
+        )
+    };
+    assert_eq!(s, RveStatus::NullArgument as u32);
+    assert!(last_error_message().contains("tangent"));
+    // Scene errors.
+    assert_eq!(
+        init_text("this is not toml [").0,
+        RveStatus::BadScene as u32
+    );
+    let bad = common::paper_scene_with(&[("delta_c = 0.0002", "delta_c = -1.0")]);
+    assert_eq!(init_text(&bad).0, RveStatus::BadScene as u32);
+    let crowded = common::paper_scene_with(&[("area_fraction = 0.45", "area_fraction = 0.7")]);
+    let crowded = crowded.replace("max_rounds", "x").replace(
+        "margin = 0.3",
+        "margin = 0.3\nmax_rounds = 1\nmax_attempts = 10",
+    );
+    assert_eq!(init_text(&crowded).0, RveStatus::MeshFailed as u32);
+    let missing = CString::new("/nonexistent/scene.toml").unwrap();
+    let mut out = 0;
+    assert_eq!(
+        unsafe { rve_init_file(missing.as_ptr(), &mut out) },
+        RveStatus::BadScene as u32
+    );
+    assert_eq!(out, 0);
+    assert_eq!(
+        unsafe { rve_init_file(null(), &mut out) },
+        RveStatus::NullArgument as u32
+    );
+    // Last error buffer: truncation and length query.
+    let n = unsafe { rve_last_error(null_mut(), 0) };
+    assert!(n > 10);
+    let mut buf = [0x55u8; 8];
+    assert_eq!(
+        unsafe { rve_last_error(buf.as_mut_ptr().cast(), buf.len()) },
+        n
+    );
+    assert_eq!(buf[7], 0);
+    assert_eq!(rve_free(h), OK);
+}
+
+#[test]
+fn solver_failure_keeps_the_committed_state_and_suggests_a_smaller_step() {
+    let text = common::paper_scene_with(&[(
+        "max_iterations = 40",
+        "max_iterations = 1\npath_following = false\nmax_secant_iterations = 0\nmax_substep_depth = 0",
+    )]);
+    let (s, h) = init_text(&text);
+    assert_eq!(s, OK, "{}", last_error_message());
+    let mut saved_before = vec![0u8; 1 << 20];
+    let mut n_before = 0;
+    unsafe {
+        rve_state_save(
+            h,
+            saved_before.as_mut_ptr(),
+            saved_before.len(),
+            &mut n_before,
+        )
+    };
+    let e = [3e-4, 0.0, 0.0];
+    let mut stress = [7.0; 3];
+    let mut tangent = [7.0; 9];
+    let mut info = RveInfo {
+        iterations: 9,
+        substeps: 9,
+        factorizations: 9,
+        reliability: 9,
+        suggested_step_ratio: 9.0,
+        s_zz: 9.0,
+    };
+    let s = unsafe {
+        rve_update_ex(
+            h,
+            e.as_ptr(),
+            stress.as_mut_ptr(),
+            tangent.as_mut_ptr(),
+            CONSISTENT,
+            &mut info,
+        )
+    };
+    assert_eq!(
+        s,
+        RveStatus::SolverFailed as u32,
+        "{}",
+        last_error_message()
+    );
+    assert_eq!(stress, [7.0; 3]);
+    assert_eq!(info.reliability, RveReliability::Failed as i32);
+    assert!(info.suggested_step_ratio > 0.0 && info.suggested_step_ratio < 1.0);
+    assert_eq!(rve_commit(h), RveStatus::NoTrial as u32);
+    let mut saved_after = vec![0u8; 1 << 20];
+    let mut n_after = 0;
+    unsafe { rve_state_save(h, saved_after.as_mut_ptr(), saved_after.len(), &mut n_after) };
+    assert_eq!(saved_before[..n_before], saved_after[..n_after]);
+    rve_free(h);
+}
+
+#[test]
+fn state_bytes_round_trip_and_refuse_foreign_states() {
+    let h = init_paper();
+    let (s, _, _) = update(h, [1.5e-4, 0.0, 0.0]);
+    assert_eq!(s, OK);
+    assert_eq!(rve_commit(h), OK);
+    let mut size = 0;
+    assert_eq!(unsafe { rve_state_size(h, &mut size) }, OK);
+    let mut small = vec![0u8; 10];
+    let mut written = 0;
+    assert_eq!(
+        unsafe { rve_state_save(h, small.as_mut_ptr(), small.len(), &mut written) },
+        RveStatus::BufferTooSmall as u32
+    );
+    assert_eq!(written, size);
+    let mut bytes = vec![0u8; size];
+    assert_eq!(
+        unsafe { rve_state_save(h, bytes.as_mut_ptr(), size, &mut written) },
+        OK
+    );
+    let next = [1.6e-4, 0.0, 0.0];
+    let (_, sig_a, d_a) = update(h, next);
+    // A new instance loaded with the bytes continues bit-identically.
+    let h2 = init_paper();
+    assert_eq!(unsafe { rve_state_load(h2, bytes.as_ptr(), size) }, OK);
+    let (_, sig_b, d_b) = update(h2, next);
+    assert_eq!(sig_a.map(f64::to_bits), sig_b.map(f64::to_bits));
+    assert_eq!(d_a.map(f64::to_bits), d_b.map(f64::to_bits));
+    // Garbage, truncation, another version, another scene.
+    let load = |b: &[u8]| unsafe { rve_state_load(h2, b.as_ptr(), b.len()) };
+    assert_eq!(load(&[1, 2, 3]), RveStatus::BadState as u32);
+    assert_eq!(load(&[0u8; 100]), RveStatus::BadState as u32);
+    assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
+    let mut v2 = bytes.clone();
+    v2[8] = 2;
+    assert_eq!(load(&v2), RveStatus::StateVersion as u32);
+    let gmsh = CString::new(
+        common::repo("scenes/gmsh_two_circles.toml")
+            .to_str()
+            .unwrap(),
+    )
+    .unwrap();
+    let mut other = 0;
+    assert_eq!(unsafe { rve_init_file(gmsh.as_ptr(), &mut other) }, OK);
+    assert_eq!(
+        unsafe { rve_state_load(other, bytes.as_ptr(), size) },
+        RveStatus::StateMismatch as u32
+    );
+    assert_eq!(
+        unsafe { rve_state_load(h2, null(), 5) },
+        RveStatus::NullArgument as u32
+    );
+    for x in [h, h2, other] {
+        assert_eq!(rve_free(x), OK);
+    }
+}
+
+#[test]
+fn path_points_match_the_cli() {
+    let h = init_paper();
+    let scene = common::scene("scenes/paper_rve.toml");
+    let points = rve::cli::path_points(&scene.spec.path);
+    let mut n = 0;
+    assert_eq!(unsafe { rve_path_len(h, &mut n) }, OK);
+    assert_eq!(n, points.len());
+    for (i, p) in points.iter().enumerate() {
+        let mut e = [0.0; 3];
+        assert_eq!(unsafe { rve_path_point(h, i, e.as_mut_ptr()) }, OK);
+        assert_eq!(&e, p);
+    }
+    let mut e = [0.0; 3];
+    assert_eq!(
+        unsafe { rve_path_point(h, n, e.as_mut_ptr()) },
+        RveStatus::InvalidArgument as u32
+    );
+    rve_free(h);
+}
+
+#[test]
+fn batch_and_threads_are_bit_identical_to_serial() {
+    let m = 6;
+    let handles: Vec<RveHandle> = (0..m).map(|_| init_paper()).collect();
+    let strains: Vec<f64> = (0..m)
+        .flat_map(|k| [1e-5 * (k as f64 + 1.0), -2e-6 * k as f64, 1e-6 * k as f64])
+        .collect();
+    let serial: Vec<_> = (0..m)
+        .map(|k| {
+            update(
+                handles[k],
+                [strains[3 * k], strains[3 * k + 1], strains[3 * k + 2]],
+            )
+        })
+        .collect();
+    for nthreads in [1usize, 2, 0] {
+        let mut stresses = vec![0.0; 3 * m];
+        let mut tangents = vec![0.0; 9 * m];
+        let mut statuses = vec![77u32; m];
+        let s = unsafe {
+            rve_update_batch(
+                handles.as_ptr(),
+                m,
+                strains.as_ptr(),
+                stresses.as_mut_ptr(),
+                tangents.as_mut_ptr(),
+                statuses.as_mut_ptr(),
+                CONSISTENT,
+                nthreads,
+            )
+        };
+        assert_eq!(s, OK);
+        for k in 0..m {
+            assert_eq!(statuses[k], OK);
+            assert_eq!(stresses[3 * k..3 * k + 3], serial[k].1);
+            assert_eq!(tangents[9 * k..9 * k + 9], serial[k].2);
+        }
+    }
+    // A bad item fails alone.
+    let mut bad_handles = handles.clone();
+    bad_handles[1] = 42;
+    let mut stresses = vec![0.0; 3 * m];
+    let mut statuses = vec![77u32; m];
+    let s = unsafe {
+        rve_update_batch(
+            bad_handles.as_ptr(),
+            m,
+            strains.as_ptr(),
+            stresses.as_mut_ptr(),
+            null_mut(),
+            statuses.as_mut_ptr(),
+            RveTangentRequest::None as i32,
+            2,
+        )
+    };
+    assert_eq!(s, RveStatus::BatchFailed as u32);
+    assert_eq!(statuses[1], RveStatus::BadHandle as u32);
+    assert!(last_error_message().starts_with("item 1:"));
+    assert_eq!(statuses[0], OK);
+    // Host threads on distinct instances.
+    let results: Vec<_> = std::thread::scope(|s| {
+        let hs: Vec<_> = (0..m)
+            .map(|k| {
+                let h = handles[k];
+                let e = [strains[3 * k], strains[3 * k + 1], strains[3 * k + 2]];
+                s.spawn(move || update(h, e))
+            })
+            .collect();
+        hs.into_iter().map(|t| t.join().unwrap()).collect()
+    });
+    for k in 0..m {
+        assert_eq!(results[k].1, serial[k].1);
+        assert_eq!(results[k].2, serial[k].2);
+    }
+    for h in handles {
+        assert_eq!(rve_free(h), OK);
+    }
+}
+
+#[test]
+fn one_instance_from_two_threads_is_busy_or_fine_never_corrupt() {
+    let h = init_paper();
+    let e = [8e-5, 0.0, 0.0];
+    let (_, reference, _) = update(h, e);
+    let (busy, ok) = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..2)
+            .map(|_| {
+                s.spawn(move || {
+                    let (mut busy, mut ok) = (0, 0);
+                    for _ in 0..20 {
+                        let (st, sig, _) = update(h, e);
+                        if st == OK {
+                            assert_eq!(sig, reference);
+                            ok += 1;
+                        } else {
+                            assert_eq!(st, RveStatus::InstanceBusy as u32);
+                            busy += 1;
+                        }
+                    }
+                    (busy, ok)
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| w.join().unwrap())
+            .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+    });
+    assert_eq!(busy + ok, 40);
+    assert!(ok > 0);
+    assert_eq!(rve_free(h), OK);
+}
