@@ -642,13 +642,16 @@ fn paper_tolerance_1e_7_errors_scale_with_it() {
 #[test]
 fn mode_one_softening_unloading_reloading_contact() {
     // Past the peak in pure mode I (2 x 2 mm: no snap-back), back, again, and closed.
+    // The reload takes 18 steps so that no increment lands exactly on the previous
+    // maximum strain: there delta == delta_max, loading and unloading give the same
+    // traction, and which branch a point reports is decided by rounding.
     let setup = Setup::short(Analysis::PlaneStrain, 4.0);
     let e = compare(
         &setup,
         &path(&[
             ([4e-4, 0.0, 0.0], 40),
             ([1e-4, 0.0, 0.0], 10),
-            ([5e-4, 0.0, 0.0], 20),
+            ([5e-4, 0.0, 0.0], 18),
             ([-1e-4, 0.0, 0.0], 20),
         ]),
         "PlaneStrain mode I load/unload/reload/close",
@@ -972,17 +975,12 @@ fn snap_back_lands_on_the_post_snap_branch() {
 
 /// The same snap over other increment sizes. Past the limit point `||R||` has a local
 /// minimum at the limit point itself (for the uniform mode
-/// `||R|| / ||G eps|| = |eps - eps_xx(delta)| / eps`, smallest at `delta_1`), and the
-/// RVE Newton's line search on `||R||` leaves it only by a lucky long step. Measured
-/// (src/solver/newton.rs as of this commit, `max_iterations = 30`, 6 bisections): 20 of
-/// these 40 paths get past the snap; the others stall, the residual hovering at the
-/// local minimum (relative 3e-5 to 3e-3) or cycling, and sub-stepping only moves the
-/// crossing closer to the limit point. `max_iterations = 100` rescues about a third of
-/// the failures, by luck again. Every path that converges lands on the closed-form
-/// post-snap branch.
+/// `||R|| / ||G eps|| = |eps - eps_xx(delta)| / eps`, smallest at `delta_1`), so a
+/// Newton with a line search on `||R||` alone stalls there: before path following was
+/// added to src/solver (arc length across the snap, `src/solver/arclength.rs`) only 20
+/// of these 40 paths got past it. Now every one must, and land on the closed-form
+/// post-snap branch (checked in `snap_back_run`).
 #[test]
-#[ignore = "the RVE Newton (line search on ||R||) often stalls at the snap-back limit point, \
-            a local minimum of ||R||; needs solver work in src/solver/newton.rs"]
 fn snap_back_over_increment_sizes() {
     let mut failures = Vec::new();
     let mut landed = 0;
