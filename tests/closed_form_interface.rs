@@ -117,7 +117,7 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
 use rve::constraint::FIXED;
-use rve::interface::{Branch, CohesiveHistory, CohesiveLaw, Penalty};
+use rve::interface::{Branch, CohesiveHistory, CohesiveLaw, ContactShear, Penalty};
 use rve::material::{Analysis, IsotropicElastic};
 use rve::{Instance, Model, Scene, TangentRequest};
 
@@ -229,6 +229,7 @@ max_iterations = {it}
                 beta: BETA,
                 penalty: Penalty::PerLength { lambda_p: LAMBDA_P },
                 contact: true,
+                contact_shear: ContactShear::Penalty,
             },
             jump: [0.0; 2],
             history: CohesiveHistory::default(),

@@ -4,7 +4,7 @@
 
 use nalgebra::{SVector, Vector3};
 use rve::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature, MAX_POINTS};
-use rve::interface::{CohesiveHistory, CohesiveLaw, Penalty};
+use rve::interface::{CohesiveHistory, CohesiveLaw, ContactShear, Penalty};
 use rve::material::{Analysis, IsotropicElastic};
 
 #[path = "common/counting_alloc.rs"]
@@ -18,6 +18,7 @@ fn law() -> CohesiveLaw {
         beta: 0.707,
         penalty: Penalty::PerLength { lambda_p: 1e5 },
         contact: true,
+        contact_shear: ContactShear::Penalty,
     }
 }
 

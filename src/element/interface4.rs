@@ -323,7 +323,7 @@ pub fn evaluate_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interface::Penalty;
+    use crate::interface::{ContactShear, Penalty};
 
     const DC: f64 = 2e-4;
     const QUADS: [InterfaceQuadrature; 2] =
@@ -336,6 +336,7 @@ mod tests {
             beta: 0.707,
             penalty: Penalty::PerLength { lambda_p: 1e7 },
             contact: true,
+            contact_shear: ContactShear::Penalty,
         }
     }
 

@@ -42,7 +42,26 @@
 //! Unloading (eq. 46): `C = (t_max/delta_max) diag(beta^2, 1)`.
 //!
 //! Contact, when enabled and `delta_n < 0` (eqs. 36-37, tangent eq. 47): a penalty on both
-//! components, `t = k_p [delta_s, delta_n]`, `C = k_p I`, with `k_p` from [`Penalty`].
+//! components, `t = k_p [delta_s, delta_n]`, `C = k_p I`, with `k_p` from [`Penalty`]
+//! ([`ContactShear::Penalty`], the paper's law). Alternative, [`ContactShear::Cohesive`]
+//! (Ortiz & Pandolfi 1999, whom the paper follows for the cohesive part): the penalty acts on
+//! the normal component only, and the sliding of a closed crack keeps the cohesive law with
+//! the normal opening clamped at zero,
+//! ```text
+//! t_s = k(delta) beta^2 delta_s,  t_n = k_p delta_n,  delta = beta |delta_s|
+//! C   = [[dt_s/d delta_s, 0], [0, k_p]]
+//! ```
+//! i.e. the potential `phi(sqrt(beta^2 ds^2 + <dn>^2)) + k_p <-dn>^2 / 2`: the traction is
+//! continuous at `delta_n = 0` and the tangent symmetric.
+//!
+//! **Why the option exists.** The paper's law is discontinuous in `t_s` at `delta_n = 0`:
+//! just open, `t_s = k beta^2 delta_s` with the (possibly damaged) cohesive secant `k`; just
+//! closed, `t_s = k_p delta_s`. On paths that close some ITZ points while sliding them, e.g.
+//! a uniaxial macro stress with its Poisson contraction, the discrete equilibrium can then
+//! have no solution near the switch, and every solver cycles (measured: the paper's RVE under
+//! `eps = t [1, -0.1935, -3.6e-4]` fails at `eps_xx = 3.3e-5` with the paper's law and
+//! converges to past the peak with `Cohesive`). The shipped paper scenes keep the paper's
+//! law; hosts that drive general strain paths should choose `Cohesive`.
 //!
 //! The loading secant and tangent derive from the potential `phi(delta)` with
 //! `dphi/d delta = t(delta)`, so `C` is symmetric in every branch.
@@ -69,7 +88,9 @@
 //! * **Contact replaces the cohesive traction** (the two are not added) and acts on both
 //!   components: a closed point sticks in shear with the penalty stiffness, as eq. 36 says;
 //!   there is no friction law or slip. The history is frozen while in contact, so a closed
-//!   point can neither damage nor heal.
+//!   point can neither damage nor heal. ([`ContactShear::Cohesive`] instead: the sliding of
+//!   a closed point follows the cohesive law of `beta |delta_s|`, which may advance the
+//!   history, i.e. shear can damage a closed interface.)
 //! * **Contact switched off** (`contact = false`): the cohesive law acts symmetrically for
 //!   `delta_n < 0` (the effective opening uses `delta_n^2`, `t_n = k delta_n` is compressive)
 //!   and compression can drive `delta_max` up, i.e. damage the interface. Interpenetration is
@@ -99,6 +120,19 @@ pub enum Penalty {
     PerArea { stiffness: f64 },
 }
 
+/// What carries the shear of a closed interface point (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactShear {
+    /// The paper's eq. 47: the penalty on both components, history frozen (a closed point
+    /// sticks). Discontinuous in `t_s` at `delta_n = 0`.
+    #[default]
+    Penalty,
+    /// Ortiz & Pandolfi (1999): the penalty on the normal component only; the sliding keeps
+    /// the cohesive law with the opening `beta |delta_s|`. Continuous at `delta_n = 0`.
+    Cohesive,
+}
+
 /// Parameters of the cohesive-contact law.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CohesiveLaw {
@@ -112,6 +146,8 @@ pub struct CohesiveLaw {
     pub penalty: Penalty,
     /// Unilateral contact on closure (`delta_n < 0`); off: the cohesive law is symmetric.
     pub contact: bool,
+    /// What carries the shear of a closed point, when `contact` is on.
+    pub contact_shear: ContactShear,
 }
 
 /// The internal variables of one quadrature point, `q` of eq. 19. Virgin = zeros.
@@ -130,7 +166,8 @@ pub enum Branch {
     Loading,
     /// `delta < delta_max`: secant to the origin (eq. 24), history unchanged.
     Unloading,
-    /// Contact on and `delta_n < 0`: penalty (eqs. 36-37), history unchanged.
+    /// Contact on and `delta_n < 0`: penalty (eqs. 36-37); history unchanged with
+    /// [`ContactShear::Penalty`], advanced by the sliding with [`ContactShear::Cohesive`].
     Contact,
 }
 
@@ -145,8 +182,12 @@ pub struct CohesivePoint {
     pub history: CohesiveHistory,
     /// The branch taken.
     pub branch: Branch,
-    /// Effective opening `delta` (eq. 20) of the trial jump, in every branch.
+    /// Effective opening `delta` (eq. 20) of the trial jump, in every branch
+    /// (`beta |delta_s|` at a closed point with [`ContactShear::Cohesive`]).
     pub opening: f64,
+    /// The cohesive secant `k = t/delta` at `opening` (eqs. 32-35); the penalty `k_p` at a
+    /// closed point with [`ContactShear::Penalty`].
+    pub secant: f64,
 }
 
 impl Penalty {
@@ -192,12 +233,13 @@ impl CohesiveLaw {
     /// secant of the envelope, eq. 21), elsewhere the consistent tangent (eqs. 46-47 are
     /// already secant). Positive definite; used by the secant iterations of the solver.
     pub fn secant_matrix(&self, point: &CohesivePoint) -> Matrix2<f64> {
-        match point.branch {
-            Branch::Loading => {
-                let k = self.loading_secant(point.opening);
-                Matrix2::new(k * self.beta * self.beta, 0.0, 0.0, k)
+        let shear = point.secant * self.beta * self.beta;
+        match (point.branch, self.contact_shear) {
+            (Branch::Loading, _) => Matrix2::new(shear, 0.0, 0.0, point.secant),
+            (Branch::Contact, ContactShear::Cohesive) => {
+                Matrix2::new(shear, 0.0, 0.0, point.tangent[(1, 1)])
             }
-            Branch::Unloading | Branch::Contact => point.tangent,
+            (Branch::Unloading, _) | (Branch::Contact, ContactShear::Penalty) => point.tangent,
         }
     }
 
@@ -212,22 +254,38 @@ impl CohesiveLaw {
         length: f64,
     ) -> CohesivePoint {
         let [ds, dn] = jump;
-        let beta = self.beta;
-        let bs = beta * ds;
-        let opening = bs.hypot(dn);
-
         if self.contact && dn < 0.0 {
             // Eqs. 36-37 and 47.
             let kp = self.contact_stiffness(length);
-            return CohesivePoint {
-                traction: Vector2::new(kp * ds, kp * dn),
-                tangent: Matrix2::from_diagonal_element(kp),
-                history: *history,
-                branch: Branch::Contact,
-                opening,
+            return match self.contact_shear {
+                ContactShear::Penalty => CohesivePoint {
+                    traction: Vector2::new(kp * ds, kp * dn),
+                    tangent: Matrix2::from_diagonal_element(kp),
+                    history: *history,
+                    branch: Branch::Contact,
+                    opening: (self.beta * ds).hypot(dn),
+                    secant: kp,
+                },
+                ContactShear::Cohesive => {
+                    // The cohesive law of the sliding alone (at delta_n = 0 its
+                    // off-diagonal tangent terms vanish), plus the normal penalty.
+                    let mut point = self.open(history, ds, 0.0);
+                    point.traction.y = kp * dn;
+                    point.tangent[(1, 1)] = kp;
+                    point.branch = Branch::Contact;
+                    point
+                }
             };
         }
+        self.open(history, ds, dn)
+    }
 
+    /// The cohesive law of an open (or, with contact off, any) point: loading on the
+    /// envelope or unloading to the origin.
+    fn open(&self, history: &CohesiveHistory, ds: f64, dn: f64) -> CohesivePoint {
+        let beta = self.beta;
+        let bs = beta * ds;
+        let opening = bs.hypot(dn);
         if opening >= history.delta_max {
             // Loading, eqs. 23, 32-33, tangent eq. 45.
             let k = self.loading_secant(opening);
@@ -249,6 +307,7 @@ impl CohesiveLaw {
                 },
                 branch: Branch::Loading,
                 opening,
+                secant: k,
             }
         } else {
             // Unloading/reloading to the origin, eqs. 24, 34-35, tangent eq. 46.
@@ -260,6 +319,7 @@ impl CohesiveLaw {
                 history: *history,
                 branch: Branch::Unloading,
                 opening,
+                secant: k,
             }
         }
     }
@@ -279,6 +339,7 @@ mod tests {
             beta: 0.707,
             penalty: Penalty::PerLength { lambda_p: 1e7 },
             contact,
+            contact_shear: ContactShear::Penalty,
         }
     }
 
@@ -386,6 +447,79 @@ mod tests {
         }
         let l = law(true);
         assert_eq!(l.contact_stiffness(0.5), 0.5e7);
+    }
+
+    /// `ContactShear::Cohesive` at a closed point: normal penalty, sliding on the cohesive
+    /// law of `beta |delta_s|` (loading advances the history, unloading keeps it), exact
+    /// tangent, and the secant matrix of the solver's secant iterations.
+    #[test]
+    fn cohesive_contact_shear_tangent_and_history() {
+        let l = CohesiveLaw {
+            contact_shear: ContactShear::Cohesive,
+            ..law(true)
+        };
+        let kp = l.contact_stiffness(LEN);
+        let damaged = loaded_to(&l, 1.5 * DC);
+        // (history, jump, branch of the sliding)
+        for (h, jump, sliding_loads) in [
+            (CohesiveHistory::default(), [0.4 * DC, -0.1 * DC], true),
+            (damaged, [3.0 * DC, -0.2 * DC], true), // beta |ds| = 2.1 dc > 1.5 dc
+            (damaged, [0.5 * DC, -0.2 * DC], false),
+        ] {
+            check_tangent(&l, &h, jump, 1e-6 * DC, Branch::Contact);
+            let p = l.evaluate(&h, jump, LEN);
+            let sliding = l.evaluate(&h, [jump[0], 0.0], LEN);
+            assert_eq!(p.traction.x, sliding.traction.x);
+            assert_eq!(p.traction.y, kp * jump[1]);
+            assert_eq!(p.tangent[(0, 1)], 0.0);
+            assert_eq!(p.tangent[(1, 0)], 0.0);
+            assert_eq!(p.tangent[(1, 1)], kp);
+            assert!((p.opening - l.beta * jump[0].abs()).abs() < 1e-18);
+            if sliding_loads {
+                assert_eq!(p.history.delta_max, p.opening);
+                assert_eq!(p.history.t_max, l.envelope(p.opening));
+            } else {
+                assert_eq!(p.history, h);
+            }
+            let k = p.history.t_max / p.history.delta_max;
+            let secant = l.secant_matrix(&p);
+            assert!((secant[(0, 0)] - k * l.beta * l.beta).abs() <= 1e-12 * k);
+            assert_eq!(secant[(1, 1)], kp);
+        }
+    }
+
+    /// The traction is continuous across closure (`delta_n = 0`) with
+    /// `ContactShear::Cohesive`, and jumps in shear with the paper's `Penalty` (by
+    /// `(k_p - k beta^2) delta_s`, the reason the option exists).
+    #[test]
+    fn closure_continuity_of_the_two_contact_shears() {
+        let damaged = loaded_to(&law(true), 1.5 * DC);
+        let ds = 0.5 * DC;
+        let tiny = 1e-12 * DC;
+        for (shear, continuous) in [
+            (ContactShear::Cohesive, true),
+            (ContactShear::Penalty, false),
+        ] {
+            let l = CohesiveLaw {
+                contact_shear: shear,
+                ..law(true)
+            };
+            let open = l.evaluate(&damaged, [ds, tiny], LEN);
+            let closed = l.evaluate(&damaged, [ds, -tiny], LEN);
+            assert_eq!(open.branch, Branch::Unloading);
+            assert_eq!(closed.branch, Branch::Contact);
+            let jump = (open.traction - closed.traction).norm() / open.traction.norm();
+            if continuous {
+                assert!(jump < 1e-6, "{shear:?}: jump {jump:e}");
+            } else {
+                let k = damaged.t_max / damaged.delta_max;
+                let expected = (l.contact_stiffness(LEN) - k * l.beta * l.beta) * ds;
+                assert!(
+                    ((closed.traction.x - open.traction.x) - expected).abs()
+                        < 1e-9 * expected.abs()
+                );
+            }
+        }
     }
 
     #[test]

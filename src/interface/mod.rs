@@ -2,4 +2,4 @@
 
 mod cohesive;
 
-pub use cohesive::{Branch, CohesiveHistory, CohesiveLaw, CohesivePoint, Penalty};
+pub use cohesive::{Branch, CohesiveHistory, CohesiveLaw, CohesivePoint, ContactShear, Penalty};

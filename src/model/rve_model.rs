@@ -78,6 +78,7 @@ impl Model {
                     (None, None) => Penalty::PerArea { stiffness: 0.0 },
                 },
                 contact: spec.effects.contact,
+                contact_shear: itz.contact_shear,
             })
         } else {
             None

@@ -255,6 +255,11 @@ pub struct ItzSpec {
     /// Shear-to-normal weight in the effective opening (eq. 20).
     pub beta: f64,
     pub penalty: PenaltySpec,
+    /// What carries the shear of a closed point: `"penalty"` (the paper's eq. 47, default)
+    /// or `"cohesive"` (Ortiz-Pandolfi: normal penalty only, continuous at closure). See
+    /// [`crate::interface::ContactShear`].
+    #[serde(default)]
+    pub contact_shear: crate::interface::ContactShear,
 }
 
 /// Contact penalty, exactly one of:
