@@ -18,9 +18,10 @@
 !   (0-based). Received as `real(c_double) :: d(3,3)` (column-major), the raw interfaces
 !   below (rve_update, rve_update_ex, rve_update_batch) give
 !         d(j, i) = d s_i / d e_j,   i.e. d = TRANSPOSE of the Jacobian
-!   (equal when the tangent is symmetric; the consistent tangent is symmetric only up to
-!   rounding in general). The wrapper rve_update_f transposes for you and returns the
-!   UMAT orientation ddsdde(i, j) = d s_i / d e_j (Abaqus DDSDDE).
+!   (equal only when the tangent is symmetric: do not rely on it; the consistent tangent
+!   need not be symmetric, and on the paper's cycle its transpose differs in the last
+!   bits). The wrapper rve_update_f transposes for you and returns the UMAT orientation
+!   ddsdde(i, j) = d s_i / d e_j (Abaqus DDSDDE).
 ! - Handles are `integer(c_int64_t)` ids (C: RveHandle = int64_t), never pointers; 0 is
 !   never valid. Ids lie in [2^32, 2^52), so they are exact in a `real(c_double)`: a UMAT
 !   may keep one in a STATEV slot, `statev(1) = real(h, c_double)` and
