@@ -1,0 +1,282 @@
+! api_check.f90 -- calls every bind(C) interface of module rve and checks the results
+! against each other: a binding that compiles and links but passes an argument wrongly
+! (value or reference, array layout, width) shows up here. scripts/test-fortran checks the
+! declarations against include/rve.h; this checks the calls.
+!
+! Usage: api_check [SCENE_DIR]      (default: scenes; uses SCENE_DIR/paper_rve.toml)
+! Exit status 0 when every check passed.
+program api_check
+  use rve
+  use, intrinsic :: iso_c_binding, only: c_associated
+  use, intrinsic :: iso_fortran_env, only: error_unit
+  implicit none
+  integer :: checks = 0, failures = 0
+  character(len=4096) :: dir
+  character(len=:), allocatable :: scene, text
+  integer(c_int64_t) :: h, h2, h3, builds
+  real(c_double), parameter :: eps1(3) = [6.0e-5_c_double, 1.0e-5_c_double, 2.0e-5_c_double]
+  real(c_double), parameter :: eps2(3) = [1.2e-4_c_double, 2.0e-5_c_double, -1.0e-5_c_double]
+
+  dir = 'scenes'
+  if (command_argument_count() >= 1) call get_command_argument(1, dir)
+  scene = trim(dir) // '/paper_rve.toml'
+
+  call versions()
+  text = read_text(scene)
+  call expect(len(text) > 0, 'read ' // scene)
+
+  ! rve_init_text through the raw interface (NUL-terminated arrays), then a second model
+  ! built from the file: the text and the file are distinct cache keys.
+  builds = rve_model_builds()
+  h = 0
+  call expect_status(rve_init_text(text // c_null_char, trim(dir) // c_null_char, h), &
+      RVE_STATUS_OK, 'rve_init_text')
+  call expect(rve_model_builds() == builds + 1, 'rve_model_builds counts the new model')
+  h2 = 0
+  call expect_status(rve_clone_model(h, h2), RVE_STATUS_OK, 'rve_clone_model')
+  h3 = 0
+  call expect_status(rve_clone_model(h, h3), RVE_STATUS_OK, 'rve_clone_model')
+  call expect(rve_model_builds() == builds + 1, 'clones share the model')
+  call expect(h /= 0 .and. h2 /= 0 .and. h3 /= 0 .and. h /= h2 .and. h2 /= h3, &
+      'distinct non-zero handles')
+
+  call updates()
+  call trial_semantics()
+  call state_bytes()
+  call batch()
+  call last_error_raw()
+
+  call expect_status(rve_free(h), RVE_STATUS_OK, 'rve_free')
+  call expect_status(rve_free(h2), RVE_STATUS_OK, 'rve_free')
+  call expect_status(rve_free(h3), RVE_STATUS_OK, 'rve_free')
+  call expect_status(rve_free(0_c_int64_t), RVE_STATUS_OK, 'rve_free(0)')
+  deallocate (scene, text)   ! main-program allocatables are not freed at the end
+  write (*, '(a,i0,a,i0,a)') 'api_check: ', checks, ' checks, ', failures, ' failed'
+  if (failures > 0) stop 1
+
+contains
+
+  subroutine versions()
+    type(c_ptr) :: p
+    call expect(rve_version_number() == 10000 * RVE_VERSION_MAJOR + 100 * RVE_VERSION_MINOR &
+        + RVE_VERSION_PATCH, 'rve_version_number')
+    call expect(rve_version_f() == RVE_MODULE_VERSION, 'rve_version = RVE_MODULE_VERSION')
+    call expect(rve_abi_version() == RVE_MODULE_ABI_VERSION, 'rve_abi_version')
+    p = rve_version()
+    call expect(c_associated(p), 'rve_version is not NULL')
+    p = rve_status_message(RVE_STATUS_PANIC)
+    call expect(c_associated(p), 'rve_status_message is not NULL')
+    call expect(rve_status_message_f(RVE_STATUS_OK) /= rve_status_message_f(RVE_STATUS_PANIC), &
+        'distinct status messages')
+    call expect(rve_status_message_f(4242_c_int32_t) == 'unknown status code', &
+        'unknown status code')
+  end subroutine versions
+
+  ! rve_update, rve_update_ex and rve_update_f agree; the tangent requests.
+  subroutine updates()
+    real(c_double) :: s1(3), s2(3), s3(3), d1(3, 3), d2(3, 3), d3(3, 3), e1(3, 3), e2(3, 3)
+    type(rve_info) :: info
+    s1 = 0; s2 = 0; s3 = 0; d1 = 0; d2 = 0; d3 = 0; e1 = 0; e2 = 0
+    info = rve_info(0, 0, 0, 0, 0.0_c_double, -1.0_c_double)
+    call expect_status(rve_update(h, eps1, s1, d1, RVE_TANGENT_REQUEST_CONSISTENT), &
+        RVE_STATUS_OK, 'rve_update')
+    call expect_status(rve_update_ex(h, eps1, s2, d2, RVE_TANGENT_REQUEST_CONSISTENT, info), &
+        RVE_STATUS_OK, 'rve_update_ex')
+    call expect_status(rve_update_f(h, eps1, s3, d3), RVE_STATUS_OK, 'rve_update_f')
+    call expect(all_bits(s1, s2) .and. all_bits(s1, s3), 'the three updates give one stress')
+    call expect(all_bits(reshape(d1, [9]), reshape(d2, [9])), 'rve_update = rve_update_ex')
+    call expect(all_bits(reshape(d3, [9]), reshape(transpose(d1), [9])), &
+        'rve_update_f returns the transpose of the raw array')
+    call expect(info%iterations >= 1 .and. info%substeps >= 1 .and. &
+        info%factorizations >= 1 .and. info%reliability /= RVE_RELIABILITY_FAILED .and. &
+        same_bits(info%suggested_step_ratio, 1.0_c_double) .and. &
+        same_bits(info%s_zz, 0.0_c_double), 'rve_info fields (plane stress: s_zz = 0)')
+    ! The row-major layout: tangent[3*i + j] = d s_i / d e_j. Check one column by finite
+    ! differences in eps_xx (secant, so only roughly): d s / d e_xx is d3(:, 1).
+    call expect_status(rve_update(h, eps1 + [1e-9_c_double, 0.0_c_double, 0.0_c_double], &
+        s2, d2, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, 'rve_update, NONE')
+    call expect(maxval(abs((s2 - s1) / 1e-9_c_double - d3(:, 1))) < 1e-3_c_double * &
+        maxval(abs(d3)), 'ddsdde(:, 1) = d stress / d eps_xx (finite difference)')
+    ! NONE leaves the tangent alone; ELASTIC is the model's, the same at every strain.
+    d2 = 7
+    call expect_status(rve_update(h, eps2, s2, d2, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update, NONE')
+    call expect(all(abs(d2 - 7) < tiny(1.0_c_double)), 'NONE does not write the tangent')
+    call expect_status(rve_update(h, eps1, s2, e1, RVE_TANGENT_REQUEST_ELASTIC), &
+        RVE_STATUS_OK, 'rve_update, ELASTIC')
+    call expect_status(rve_update(h2, eps2, s2, e2, RVE_TANGENT_REQUEST_ELASTIC), &
+        RVE_STATUS_OK, 'rve_update, ELASTIC')
+    call expect(all_bits(reshape(e1, [9]), reshape(e2, [9])), 'one elastic tangent')
+    call expect_status(rve_revert(h), RVE_STATUS_OK, 'rve_revert')
+    call expect_status(rve_revert(h2), RVE_STATUS_OK, 'rve_revert')
+  end subroutine updates
+
+  ! Trials do not change the committed state; revert and reset.
+  subroutine trial_semantics()
+    real(c_double) :: s1(3), s2(3), d(3, 3)
+    s1 = 0; s2 = 0; d = 0
+    call expect_status(rve_update(h, eps2, s1, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update')
+    call expect_status(rve_update(h, eps1, s2, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update')
+    call expect_status(rve_update(h, eps2, s2, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update')
+    call expect(all_bits(s1, s2), 'a trial repeated gives the same bits')
+    call expect_status(rve_revert(h), RVE_STATUS_OK, 'rve_revert')
+    call expect_status(rve_commit(h), RVE_STATUS_NO_TRIAL, 'commit after revert')
+    ! Commit at eps1 on h3, reset it, and it is virgin again: eps2 as on a virgin clone.
+    call expect_status(rve_update(h3, eps1, s2, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update')
+    call expect_status(rve_commit(h3), RVE_STATUS_OK, 'rve_commit')
+    call expect_status(rve_reset(h3), RVE_STATUS_OK, 'rve_reset')
+    call expect_status(rve_update(h3, eps2, s2, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update')
+    call expect(all_bits(s1, s2), 'rve_reset returns to the virgin state')
+    call expect_status(rve_revert(h3), RVE_STATUS_OK, 'rve_revert')
+  end subroutine trial_semantics
+
+  ! Checkpoint/restart through state bytes.
+  subroutine state_bytes()
+    integer(c_size_t) :: size, written, n
+    integer(c_int8_t), allocatable :: bytes(:)
+    real(c_double) :: s1(3), s2(3), d1(3, 3), d2(3, 3), e(3)
+    s1 = 0; s2 = 0; d1 = 0; d2 = 0; e = 0
+    size = 0
+    call expect_status(rve_update(h, eps1, s1, d1, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update')
+    call expect_status(rve_commit(h), RVE_STATUS_OK, 'rve_commit')
+    call expect_status(rve_state_size(h, size), RVE_STATUS_OK, 'rve_state_size')
+    call expect(size > 0, 'state size > 0')
+    allocate (bytes(size))
+    written = 0
+    call expect_status(rve_state_save(h, bytes, size - 1, written), &
+        RVE_STATUS_BUFFER_TOO_SMALL, 'rve_state_save, short buffer')
+    call expect(written == size, 'required size reported')
+    written = 0
+    call expect_status(rve_state_save(h, bytes, size, written), RVE_STATUS_OK, &
+        'rve_state_save')
+    call expect(written == size, 'all bytes written')
+    call expect_status(rve_state_load(h2, bytes, size), RVE_STATUS_OK, 'rve_state_load')
+    call expect_status(rve_state_load(h2, bytes, size / 2), RVE_STATUS_BAD_STATE, &
+        'rve_state_load, truncated')
+    call expect_status(rve_update(h, eps2, s1, d1, RVE_TANGENT_REQUEST_CONSISTENT), &
+        RVE_STATUS_OK, 'rve_update')
+    call expect_status(rve_update(h2, eps2, s2, d2, RVE_TANGENT_REQUEST_CONSISTENT), &
+        RVE_STATUS_OK, 'rve_update')
+    call expect(all_bits(s1, s2) .and. all_bits(reshape(d1, [9]), reshape(d2, [9])), &
+        'the restored instance continues bit for bit')
+    call expect_status(rve_revert(h), RVE_STATUS_OK, 'rve_revert')
+    call expect_status(rve_revert(h2), RVE_STATUS_OK, 'rve_revert')
+    n = 0
+    call expect_status(rve_path_len(h, n), RVE_STATUS_OK, 'rve_path_len')
+    if (n > 0) then
+      call expect_status(rve_path_point(h, n - 1, e), RVE_STATUS_OK, 'rve_path_point')
+      call expect(any(abs(e) > 0), 'last path point is not zero')
+    end if
+    call expect_status(rve_path_point(h, n, e), RVE_STATUS_INVALID_ARGUMENT, &
+        'rve_path_point past the end')
+  end subroutine state_bytes
+
+  ! rve_update_batch on two threads equals single updates; a foreign handle fails alone.
+  subroutine batch()
+    integer(c_int64_t) :: handles(2)
+    real(c_double) :: strains(3, 2), stresses(3, 2), tangents(3, 3, 2), s(3), d(3, 3)
+    integer(c_int32_t) :: statuses(2)
+    integer :: k
+    handles = [h, h2]
+    strains(:, 1) = eps1
+    strains(:, 2) = eps2
+    stresses = 0; tangents = 0; statuses = -1; s = 0; d = 0
+    call expect_status(rve_update_batch(handles, 2_c_size_t, strains, stresses, tangents, &
+        statuses, RVE_TANGENT_REQUEST_CONSISTENT, 2_c_size_t), RVE_STATUS_OK, &
+        'rve_update_batch')
+    do k = 1, 2
+      call expect(statuses(k) == RVE_STATUS_OK, 'batch item status')
+      call expect_status(rve_update(handles(k), strains(:, k), s, d, &
+          RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_OK, 'rve_update')
+      call expect(all_bits(s, stresses(:, k)) .and. &
+          all_bits(reshape(d, [9]), reshape(tangents(:, :, k), [9])), &
+          'batch item = rve_update, bit for bit')
+    end do
+    handles(2) = 999
+    statuses = -1
+    call expect_status(rve_update_batch(handles, 2_c_size_t, strains, stresses, tangents, &
+        statuses, RVE_TANGENT_REQUEST_NONE, 1_c_size_t), RVE_STATUS_BATCH_FAILED, &
+        'rve_update_batch with a foreign handle')
+    call expect(statuses(1) == RVE_STATUS_OK .and. statuses(2) == RVE_STATUS_BAD_HANDLE, &
+        'batch statuses')
+    call expect_status(rve_revert(h), RVE_STATUS_OK, 'rve_revert')
+    call expect_status(rve_revert(h2), RVE_STATUS_OK, 'rve_revert')
+  end subroutine batch
+
+  ! The raw rve_last_error: length query, truncation with a NUL.
+  subroutine last_error_raw()
+    character(kind=c_char) :: small(8), probe(1)
+    integer(c_size_t) :: n, m
+    character(len=:), allocatable :: full
+    call expect_status(rve_commit(h), RVE_STATUS_NO_TRIAL, 'rve_commit without a trial')
+    n = rve_last_error(probe, 0_c_size_t)
+    full = rve_last_error_f()
+    call expect(n > 8 .and. len(full) == n, 'rve_last_error length')
+    small = 'x'
+    m = rve_last_error(small, 8_c_size_t)
+    call expect(m == n .and. small(8) == c_null_char .and. small(1) == full(1:1) .and. &
+        small(7) == full(7:7), 'rve_last_error truncates with a NUL')
+    call expect_status(rve_free(h3), RVE_STATUS_OK, 'rve_free')
+    call expect(len(rve_last_error_f()) == 0, 'no message after a success')
+    h3 = 0
+  end subroutine last_error_raw
+
+  subroutine expect(ok, what)
+    logical, intent(in) :: ok
+    character(len=*), intent(in) :: what
+    checks = checks + 1
+    if (.not. ok) then
+      failures = failures + 1
+      write (error_unit, '(a)') 'FAILED: ' // what
+    end if
+  end subroutine expect
+
+  subroutine expect_status(got, want, what)
+    integer(c_int32_t), intent(in) :: got, want
+    character(len=*), intent(in) :: what
+    checks = checks + 1
+    if (got /= want) then
+      failures = failures + 1
+      write (error_unit, '(5a)') 'FAILED: ', what, ': ', rve_status_message_f(got), &
+          ' (expected ' // rve_status_message_f(want) // '): ' // rve_last_error_f()
+    end if
+  end subroutine expect_status
+
+  logical function same_bits(a, b)
+    real(c_double), intent(in) :: a, b
+    same_bits = transfer(a, 0_c_int64_t) == transfer(b, 0_c_int64_t)
+  end function same_bits
+
+  logical function all_bits(a, b)
+    real(c_double), intent(in) :: a(:), b(:)
+    integer :: k
+    all_bits = size(a) == size(b)
+    do k = 1, min(size(a), size(b))
+      all_bits = all_bits .and. same_bits(a(k), b(k))
+    end do
+  end function all_bits
+
+  function read_text(path) result(text)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: text
+    integer :: u, n, ios
+    open (newunit=u, file=path, access='stream', form='unformatted', status='old', &
+        action='read', iostat=ios)
+    if (ios /= 0) then
+      text = ''
+      return
+    end if
+    inquire (unit=u, size=n)
+    allocate (character(len=n) :: text)
+    read (u, iostat=ios) text
+    close (u)
+    if (ios /= 0) text = ''
+  end function read_text
+
+end program api_check
