@@ -1,9 +1,10 @@
 //! Solver benchmark: `cargo bench --bench solver` prints one table row per RVE.
 //!
-//! For each scene, on one core: the median time of a converged increment along the
-//! section 5.2.1 path (`eps_xx` to 2.2e-4 in 20 increments), the iterations per increment,
-//! the median numeric factorization of the converged tangent as the solver does it (LL^T,
-//! LU when that fails) and LU alone for comparison, the 1-RHS solve time, the
+//! For each scene, on one core: the median and mean time of a converged increment along
+//! the section 5.2.1 path (`eps_xx` to 2.2e-4 in 20 increments; the mean carries the
+//! post-peak increments), the iterations per increment, the median numeric factorization
+//! of the converged tangent as the solver does it (LL^T, a checked LBL^T when that fails,
+//! LU last) with the share of each kind, and LU alone for comparison, the 1-RHS solve time, the
 //! bytes of one instance's state, and the ratio
 //! `update time / (iterations x factorization + solve)` per increment (median), which says
 //! how much an update costs beyond its unavoidable linear algebra.
@@ -32,6 +33,8 @@ struct Row {
     factor_ms: f64,
     lu_ms: f64,
     cholesky_share: f64,
+    lblt_share: f64,
+    mean_increment_ms: f64,
     solve_ms: f64,
     state_bytes: usize,
     ratio: f64,
@@ -50,6 +53,7 @@ fn bench(path: &str) -> Row {
     let mut max_iterations = 0;
     let mut lu_times = Vec::new();
     let mut cholesky_count = 0usize;
+    let mut lblt_count = 0usize;
     // Repeat the path to get stable medians.
     for _ in 0..3 {
         let mut inst = Instance::new(model.clone());
@@ -76,8 +80,10 @@ fn bench(path: &str) -> Row {
                     )
                     .expect("factorization");
                 ft.push(t.elapsed().as_secs_f64());
-                if kind == FactorKind::Cholesky {
-                    cholesky_count += 1;
+                match kind {
+                    FactorKind::Cholesky => cholesky_count += 1,
+                    FactorKind::Lblt => lblt_count += 1,
+                    FactorKind::Lu => {}
                 }
                 ws.dx.copy_from_slice(&ws.r);
                 let t = Instant::now();
@@ -116,10 +122,12 @@ fn bench(path: &str) -> Row {
         name: path.rsplit('/').next().unwrap_or(path).to_string(),
         unknowns: model.disc.n(),
         itz: model.disc.interfaces.len(),
+        mean_increment_ms: 1e3 * times.iter().sum::<f64>() / times.len() as f64,
         increment_ms: 1e3 * median(&mut times),
         iterations: median(&mut iterations),
         max_iterations,
         cholesky_share: cholesky_count as f64 / (5 * factor_times.len()) as f64,
+        lblt_share: lblt_count as f64 / (5 * factor_times.len()) as f64,
         factor_ms: 1e3 * median(&mut factor_times),
         lu_ms: 1e3 * median(&mut lu_times),
         solve_ms: 1e3 * median(&mut solve_times),
@@ -135,21 +143,23 @@ fn main() {
         format!("{root}/scenes/paper_rve_fine.toml"),
     ];
     println!(
-        "| scene | unknowns | ITZ | median increment (ms) | iterations (median / max) | factorization used (ms) | LL^T share | LU alone (ms) | solve (ms) | state bytes | update / (it x fact + solve) |"
+        "| scene | unknowns | ITZ | median increment (ms) | mean increment (ms) | iterations (median / max) | factorization used (ms) | LL^T / LBL^T share | LU alone (ms) | solve (ms) | state bytes | update / (it x fact + solve) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for s in &scenes {
         let r = bench(s);
         println!(
-            "| {} | {} | {} | {:.3} | {} / {} | {:.3} | {:.0} % | {:.3} | {:.3} | {} | {:.2} |",
+            "| {} | {} | {} | {:.3} | {:.3} | {} / {} | {:.3} | {:.0} % / {:.0} % | {:.3} | {:.3} | {} | {:.2} |",
             r.name,
             r.unknowns,
             r.itz,
             r.increment_ms,
+            r.mean_increment_ms,
             r.iterations,
             r.max_iterations,
             r.factor_ms,
             100.0 * r.cholesky_share,
+            100.0 * r.lblt_share,
             r.lu_ms,
             r.solve_ms,
             r.state_bytes,

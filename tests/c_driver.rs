@@ -23,13 +23,19 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 
 #[test]
 fn c_driver_is_bit_identical_to_rve_run_on_the_cycle() {
+    // `cargo test` builds the rlib, not the cdylib the driver links: build the shared
+    // library from the same sources and stage it, so the driver never runs a stale copy.
+    let st = Command::new(env!("CARGO"))
+        .args(["build", "--release", "--lib", "--quiet"])
+        .current_dir(common::repo(""))
+        .status()
+        .unwrap();
+    assert!(st.success(), "cargo build --release --lib failed");
+    let st = Command::new(common::repo("scripts/build-c-examples"))
+        .status()
+        .unwrap();
+    assert!(st.success(), "scripts/build-c-examples failed");
     let driver = common::repo("target/c_examples/bin/rve_driver");
-    if !driver.exists() {
-        let st = Command::new(common::repo("scripts/build-c-examples"))
-            .status()
-            .unwrap();
-        assert!(st.success(), "scripts/build-c-examples failed");
-    }
     let scene = common::repo("scenes/paper_rve_cycle.toml");
     let dir = std::env::temp_dir().join(format!("mesorve-c-driver-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -1,9 +1,10 @@
 //! The hot path allocates nothing: once a workspace and an instance exist (and the
 //! factorization buffers have grown on a first update), `Instance::update` and `commit`
 //! make no heap allocation, on loading, unloading and contact increments alike. The hot
-//! path is every increment that converges in one step with LL^T factorizations; faer's
-//! supernodal LU (indefinite tangents, past the peak) allocates inside faer, and so do the
-//! fallbacks (path following, error messages), which are asserted to be rare instead.
+//! path is every increment that converges in one step with LL^T or checked LBL^T
+//! factorizations; faer's supernodal LU (the last resort for indefinite tangents)
+//! allocates inside faer, and so do the fallbacks (path following, error messages), which
+//! are asserted to be rare instead.
 
 mod common;
 #[path = "common/counting_alloc.rs"]
@@ -47,4 +48,54 @@ fn update_and_commit_do_not_allocate() {
         checked + 3 >= total,
         "only {checked} of {total} increments on the hot path"
     );
+}
+
+/// The checked LBL^T (indefinite tangents) works in the workspace's buffers: after one
+/// warm-up call, factorizing and solving allocate nothing.
+#[test]
+fn checked_lblt_does_not_allocate() {
+    use faer::dyn_stack::MemStack;
+    use rve::solver::FactorKind;
+
+    let scene = common::scene("scenes/paper_rve.toml");
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws = model.workspace();
+    let mut inst = Instance::new(model.clone());
+    inst.update([1e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+        .unwrap();
+    // An indefinite matrix on the model's pattern: the converged tangent with its
+    // diagonal shifted down by a quarter of the mean diagonal.
+    let pattern = &model.disc.pattern;
+    let mean_diagonal = pattern
+        .diagonal_slots
+        .iter()
+        .map(|&s| ws.k[s as usize])
+        .sum::<f64>()
+        / pattern.n as f64;
+    let mut values = ws.k.clone();
+    for &s in &pattern.diagonal_slots {
+        values[s as usize] -= 0.25 * mean_diagonal;
+    }
+    let mut rhs = vec![1.0; pattern.n];
+    let mut run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
+        let kind = model
+            .linear
+            .factorize(
+                &pattern.symbolic,
+                &values,
+                &mut ws.factor,
+                true,
+                MemStack::new(&mut ws.stack),
+            )
+            .unwrap();
+        model
+            .linear
+            .solve_in_place(&ws.factor, rhs, 1, MemStack::new(&mut ws.stack));
+        kind
+    };
+    assert_eq!(run(&mut ws, &mut rhs), FactorKind::Lblt);
+    let mut kind = None;
+    let n = count_allocations(|| kind = Some(run(&mut ws, &mut rhs)));
+    assert_eq!(kind, Some(FactorKind::Lblt));
+    assert_eq!(n, 0, "{n} allocations in a checked LBL^T and its solve");
 }

@@ -80,8 +80,10 @@ pub struct IncrementReport {
     pub substeps: u32,
     /// Numeric factorizations, including any for the tangent.
     pub factorizations: u32,
-    /// How many of them were LU (indefinite tangent); the rest were LL^T.
+    /// How many of them were LU (indefinite tangent, the checked LBL^T refused).
     pub lu_factorizations: u32,
+    /// How many were the checked LBL^T (indefinite tangent); the rest were LL^T.
+    pub lblt_factorizations: u32,
     /// Interface points on the loading / unloading / contact branch at the end.
     pub loading: usize,
     pub unloading: usize,
@@ -411,7 +413,7 @@ pub fn solve_increment(
         settings,
         ..
     } = *problem;
-    let lu_before = ws.factor.lu_count;
+    let (lu_before, lblt_before) = (ws.factor.lu_count, ws.factor.lblt_count);
     trial.copy_from(committed);
     let mut report = IncrementReport::default();
     if disc.n() == 0 {
@@ -558,6 +560,7 @@ pub fn solve_increment(
         *tangent = hom.tangent(disc, &ws.kg);
     }
     report.lu_factorizations = (ws.factor.lu_count - lu_before) as u32;
+    report.lblt_factorizations = (ws.factor.lblt_count - lblt_before) as u32;
     Ok(report)
 }
 
