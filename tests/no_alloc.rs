@@ -77,7 +77,7 @@ fn checked_lblt_does_not_allocate() {
         values[s as usize] -= 0.25 * mean_diagonal;
     }
     let mut rhs = vec![1.0; pattern.n];
-    let mut run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
+    let run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
         let kind = model
             .linear
             .factorize(
