@@ -17,7 +17,8 @@
 //
 // Functions (each returns an RveStatus number, 0 = success; on failure rveLastError()
 // says what went wrong and outputs are left untouched; when one point of a vectorised
-// call fails, the status is that point's and the message names it):
+// update fails, the status is that point's, the message names it, and no point keeps a
+// trial: the committed states are unchanged and rveCommit would report NO_TRIAL):
 //   long   rveInit(string scene, long n, real[int] H)   n instances of the scene file;
 //          H is resized to n and receives the handles (int64 ids, exact in a double)
 //   long   rveUpdate(H, exx, eyy, gxy, sxx, syy, sxy, d11, ..., d33)  trial update of all
@@ -146,15 +147,25 @@ long update_all(const string &where, KN<double> *const *a, int nargs, int32_t re
   st = check(where, rve_update_batch(hs.data(), (size_t)n, strain.data(), stress.data(),
                                      tangent.empty() ? nullptr : tangent.data(),
                                      statuses.data(), request, 1));
-  if (st == RVE_STATUS_BATCH_FAILED)
+  if (st == RVE_STATUS_BATCH_FAILED) {
+    string msg = g_last_error;
+    long first = 0;
     for (long k = 0; k < n; k++)
-      if (statuses[k] != RVE_STATUS_OK) {
+      if (statuses[k] != RVE_STATUS_OK && !first) {
         ostringstream m;
         m << where << ": point " << k << ": " << rve_status_message(statuses[k]) << " (status "
-          << statuses[k] << "); " << g_last_error;
-        g_last_error = m.str();
-        return (long)statuses[k];
+          << statuses[k] << "); " << msg;
+        msg = m.str();
+        first = (long)statuses[k];
       }
+    // The points that succeeded hold a new trial; drop them too, so that after a failed
+    // call no point has a trial to commit (the C rule for one instance, kept for the set).
+    for (long k = 0; k < n; k++)
+      if (statuses[k] == RVE_STATUS_OK && rve_revert(hs[k]) != RVE_STATUS_OK)
+        msg += "; reverting point " + to_string(k) + " failed too";
+    g_last_error = msg;
+    return first;
+  }
   if (st) return st;
   // Written only on success, as the C API does.
   for (long k = 0; k < n; k++) {
@@ -209,7 +220,8 @@ class UpdateStress : public UpdateOp<7, RVE_TANGENT_REQUEST_NONE> {
 };
 
 // ---- rveCommit / rveRevert / rveFree ---------------------------------------------------
-// Every point is attempted; the first failure is reported (with its index).
+// Every point is attempted (a commit cannot be undone, so a failure part-way cannot be
+// rolled back); the first failure is reported with its point index.
 template <uint32_t (*CALL)(RveHandle), bool ZERO>
 long each(const char *name, KN<double> *const &H) {
   g_last_error.clear();
