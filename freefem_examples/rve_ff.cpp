@@ -136,7 +136,8 @@ long update_all(const string &where, KN<double> *const *a, int nargs, int32_t re
   vector<RveHandle> hs;
   long st = handles_of(where, H, &hs);
   if (st) return st;
-  vector<double> strain(3 * n), stress(3 * n), tangent(request == RVE_TANGENT_REQUEST_NONE ? 0 : 9 * n);
+  vector<double> strain(3 * n), stress(3 * n);
+  vector<double> tangent(request == RVE_TANGENT_REQUEST_NONE ? 0 : 9 * n);
   vector<uint32_t> statuses(n, RVE_STATUS_OK);
   for (long k = 0; k < n; k++)
     for (int c = 0; c < 3; c++) strain[3 * k + c] = (*a[1 + c])[k];
