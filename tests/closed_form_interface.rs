@@ -328,7 +328,7 @@ impl Reference {
             }
         }
         if h.delta_max > 0.0 {
-            let k = h.t_max / h.delta_max;
+            let k = law.envelope(h.delta_max) / h.delta_max; // eq. 24: t_max / delta_max
             let c = Matrix2::new(k * law.beta * law.beta, 0.0, 0.0, k);
             let d = (pdm + c).lu().solve(&pde).unwrap();
             if open(&d) && opening(&d) < h.delta_max {

@@ -302,9 +302,18 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     assert_eq!(load(&[1, 2, 3]), RveStatus::BadState as u32);
     assert_eq!(load(&[0u8; 100]), RveStatus::BadState as u32);
     assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
-    let mut v2 = bytes.clone();
-    v2[8] = 2;
-    assert_eq!(load(&v2), RveStatus::StateVersion as u32);
+    for unknown_version in [0u8, 3] {
+        let mut other_version = bytes.clone();
+        other_version[8] = unknown_version;
+        assert_eq!(load(&other_version), RveStatus::StateVersion as u32);
+    }
+    // A negative delta_max is refused, and the instance keeps its state.
+    let mut negative = bytes.clone();
+    let last = negative.len() - 8;
+    negative[last..].copy_from_slice(&(-1.0f64).to_le_bytes());
+    assert_eq!(load(&negative), RveStatus::BadState as u32);
+    let (_, sig_c, _) = update(h2, next);
+    assert_eq!(sig_a.map(f64::to_bits), sig_c.map(f64::to_bits));
     let gmsh = CString::new(
         common::repo("scenes/gmsh_two_circles.toml")
             .to_str()
@@ -458,4 +467,53 @@ fn one_instance_from_two_threads_is_busy_or_fine_never_corrupt() {
     assert_eq!(busy + ok, 40);
     assert!(ok > 0);
     assert_eq!(rve_free(h), OK);
+}
+
+/// `tests/data/state_format1_paper_rve.bin` was saved by mesorve 0.1.0 (state format 1,
+/// history as `[delta_max, t_max]` pairs) from `scenes/paper_rve.toml` after one committed
+/// update to `[1.5e-4, 0, 0]` (made by `scripts/make_state_format1.sh`, kept for this
+/// test). This library reads it, and the restarted instance continues like one that
+/// computed the same state itself: same stress and tangent to round-off (the secant of
+/// eq. 24 is now evaluated from `delta_max` alone, so the last bits may differ).
+#[test]
+fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
+    let bytes = std::fs::read(common::repo("tests/data/state_format1_paper_rve.bin")).unwrap();
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 1);
+    let old = init_paper();
+    assert_eq!(
+        unsafe { rve_state_load(old, bytes.as_ptr(), bytes.len()) },
+        OK
+    );
+    let fresh = init_paper();
+    assert_eq!(update(fresh, [1.5e-4, 0.0, 0.0]).0, OK);
+    assert_eq!(rve_commit(fresh), OK);
+    let next = [1.6e-4, 0.0, 0.0];
+    let (s_old, sig_old, d_old) = update(old, next);
+    let (s_new, sig_new, d_new) = update(fresh, next);
+    assert_eq!((s_old, s_new), (OK, OK));
+    let close = |a: &[f64], b: &[f64]| {
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
+    };
+    assert!(close(&sig_old, &sig_new), "{sig_old:?} vs {sig_new:?}");
+    assert!(close(&d_old, &d_new), "{d_old:?} vs {d_new:?}");
+    // Saved again, it is format 2 and a byte-identical round trip.
+    let mut size = 0;
+    assert_eq!(rve_commit(old), OK);
+    assert_eq!(unsafe { rve_state_size(old, &mut size) }, OK);
+    let mut saved = vec![0u8; size];
+    let mut written = 0;
+    assert_eq!(
+        unsafe { rve_state_save(old, saved.as_mut_ptr(), size, &mut written) },
+        OK
+    );
+    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 2);
+    assert!(
+        size < bytes.len(),
+        "format 2 is smaller: {size} vs {}",
+        bytes.len()
+    );
+    for h in [old, fresh] {
+        assert_eq!(rve_free(h), OK);
+    }
 }

@@ -346,11 +346,7 @@ mod tests {
     }
 
     fn history_at(delta: f64) -> [CohesiveHistory; MAX_POINTS] {
-        let l = law();
-        [CohesiveHistory {
-            delta_max: delta,
-            t_max: l.envelope(delta),
-        }; MAX_POINTS]
+        [CohesiveHistory { delta_max: delta }; MAX_POINTS]
     }
 
     /// Element displacement: an arbitrary motion of side A (translation, small rotation,
@@ -530,10 +526,7 @@ mod tests {
         let u = displacement(&g, [[0.3 * DC, 1.0 * DC], [0.2 * DC, -0.8 * DC]]);
         let committed = history_at(0.5 * DC);
         for q in QUADS {
-            let sentinel = CohesiveHistory {
-                delta_max: -1.0,
-                t_max: -1.0,
-            };
+            let sentinel = CohesiveHistory { delta_max: -1.0 };
             let mut trial = [sentinel; MAX_POINTS];
             evaluate(&g, q, &law(), &committed, &u, &mut trial);
             let jumps = local_jumps(&g, q, &u);
@@ -612,7 +605,7 @@ mod tests {
         let g = geom();
         let u = displacement(&g, [[0.2 * DC, 0.5 * DC], [0.4 * DC, 1.0 * DC]]);
         let committed = history_at(3.0 * DC);
-        let k = committed[0].t_max / committed[0].delta_max;
+        let k = law().envelope(committed[0].delta_max) / committed[0].delta_max; // eq. 24
         let r = g.rotation();
         let cg = r.transpose() * Matrix2::new(k * 0.707 * 0.707, 0.0, 0.0, k) * r;
         let l = g.length;

@@ -11,18 +11,25 @@
 //!     32     8  payload length in bytes (u64 LE)
 //!     40     .  payload: bincode of `State`
 //! ```
-//! A reader refuses another magic or a truncated buffer (`BadState`), another format
+//! A reader refuses another magic or a truncated buffer (`BadState`), an unknown format
 //! version (`StateVersion`: a later format adds a decoder here and keeps reading the old
 //! ones), and a model of other sizes (`StateMismatch`).
+//!
+//! | format | library | payload history |
+//! |---|---|---|
+//! | 1 | 0.1.0 | `[delta_max, t_max]` per point (read, `t_max` dropped) |
+//! | 2 | after 0.1.0 | `delta_max` per point (written) |
 
 use super::boundary::{Failure, FfiResult};
 use super::status::RveStatus;
 use crate::model::Model;
-use crate::state::State;
+use crate::state::{State, StateFormat1};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 1;
+pub const STATE_FORMAT_VERSION: u32 = 2;
+/// Older formats this library still reads.
+const READABLE_OLD_FORMATS: [u32; 1] = [1];
 const HEADER: usize = 40;
 
 fn sizes(model: &Model) -> (u64, u64) {
@@ -69,12 +76,12 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
         return Err(bad("no mesorve magic (not a saved state)"));
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-    if version != STATE_FORMAT_VERSION {
+    if version != STATE_FORMAT_VERSION && !READABLE_OLD_FORMATS.contains(&version) {
         return Err(Failure::new(
             RveStatus::StateVersion,
             format!(
-                "state format version {version}; this library reads version \
-                 {STATE_FORMAT_VERSION}"
+                "state format version {version}; this library reads versions \
+                 {READABLE_OLD_FORMATS:?} and {STATE_FORMAT_VERSION}"
             ),
         ));
     }
@@ -96,7 +103,14 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
             bytes.len() - HEADER
         )));
     }
-    let state: State = bincode::deserialize(&bytes[HEADER..]).map_err(|e| bad(&e.to_string()))?;
+    let payload = &bytes[HEADER..];
+    let state: State = if version == 1 {
+        bincode::deserialize::<StateFormat1>(payload)
+            .map_err(|e| bad(&e.to_string()))?
+            .into()
+    } else {
+        bincode::deserialize(payload).map_err(|e| bad(&e.to_string()))?
+    };
     if state.unknowns.len() as u64 != n || state.history.len() as u64 != nh {
         return Err(bad("payload sizes disagree with the header"));
     }
@@ -107,6 +121,15 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
         .any(|v| !v.is_finite())
     {
         return Err(bad("non-finite values"));
+    }
+    if state
+        .history
+        .iter()
+        .any(|h| !(h.delta_max.is_finite() && h.delta_max >= 0.0))
+    {
+        return Err(bad(
+            "an interface history delta_max that is negative or not finite",
+        ));
     }
     Ok(state)
 }

@@ -150,13 +150,17 @@ pub struct CohesiveLaw {
     pub contact_shear: ContactShear,
 }
 
-/// The internal variables of one quadrature point, `q` of eq. 19. Virgin = zeros.
+/// The internal variable of one quadrature point, `q` of eq. 19. Virgin = zero.
+///
+/// The paper's pair `(delta_max, t_max)` has one degree of freedom: the history only
+/// advances on the loading envelope (eq. 23), so `t_max = t(delta_max)` always
+/// ([`CohesiveLaw::t_max`]), and the unloading secant `t_max / delta_max` of eq. 24 is the
+/// envelope's secant at `delta_max`. Storing `delta_max` alone halves the history (8 bytes
+/// per point) and cannot let the two disagree.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CohesiveHistory {
     /// Largest effective opening reached on the loading branch.
     pub delta_max: f64,
-    /// Effective traction at `delta_max`, `t(delta_max)` of eq. 23.
-    pub t_max: f64,
 }
 
 /// Which branch of the law a point is on.
@@ -226,6 +230,20 @@ impl CohesiveLaw {
     #[inline]
     fn loading_secant(&self, delta: f64) -> f64 {
         (self.sigma_c / self.delta_c) * (1.0 - delta / self.delta_c).exp()
+    }
+
+    /// `t_max = t(delta_max)` of a history (eq. 23).
+    #[inline]
+    pub fn t_max(&self, history: &CohesiveHistory) -> f64 {
+        self.envelope(history.delta_max)
+    }
+
+    /// The secant `k = t_max / delta_max` of unloading and reloading to the origin
+    /// (eqs. 24, 34-35), as the envelope's secant at `delta_max`: no division, finite for
+    /// a virgin history.
+    #[inline]
+    pub fn unloading_secant(&self, history: &CohesiveHistory) -> f64 {
+        self.loading_secant(history.delta_max)
     }
 
     /// The secant matrix `S` with `t = S delta` at a point evaluated by
@@ -301,18 +319,14 @@ impl CohesiveLaw {
             CohesivePoint {
                 traction: Vector2::new(k * beta * bs, k * dn),
                 tangent: Matrix2::new(css, csn, csn, cnn),
-                history: CohesiveHistory {
-                    delta_max: opening,
-                    t_max: k * opening,
-                },
+                history: CohesiveHistory { delta_max: opening },
                 branch: Branch::Loading,
                 opening,
                 secant: k,
             }
         } else {
             // Unloading/reloading to the origin, eqs. 24, 34-35, tangent eq. 46.
-            // Here delta_max > opening >= 0, so the division is safe.
-            let k = history.t_max / history.delta_max;
+            let k = self.unloading_secant(history);
             CohesivePoint {
                 traction: Vector2::new(k * beta * bs, k * dn),
                 tangent: Matrix2::new(k * beta * beta, 0.0, 0.0, k),
@@ -344,11 +358,8 @@ mod tests {
     }
 
     /// History committed after loading to effective opening `delta`.
-    fn loaded_to(l: &CohesiveLaw, delta: f64) -> CohesiveHistory {
-        CohesiveHistory {
-            delta_max: delta,
-            t_max: l.envelope(delta),
-        }
+    fn loaded_to(delta: f64) -> CohesiveHistory {
+        CohesiveHistory { delta_max: delta }
     }
 
     /// Central finite difference of the traction, step `h` on each jump component.
@@ -405,7 +416,7 @@ mod tests {
     #[test]
     fn tangent_post_peak_loading() {
         let l = law(true);
-        let h = loaded_to(&l, 1.2 * DC);
+        let h = loaded_to(1.2 * DC);
         check_tangent(&l, &h, [1.1 * DC, 1.5 * DC], 1e-6 * DC, Branch::Loading);
         check_tangent(&l, &h, [-3.0 * DC, 0.2 * DC], 1e-6 * DC, Branch::Loading);
         // Softening: the normal stiffness is negative past delta_c in pure mode I.
@@ -416,10 +427,10 @@ mod tests {
     #[test]
     fn tangent_unloading() {
         let l = law(true);
-        let h = loaded_to(&l, 1.5 * DC);
+        let h = loaded_to(1.5 * DC);
         check_tangent(&l, &h, [0.4 * DC, 0.5 * DC], 1e-6 * DC, Branch::Unloading);
         check_tangent(&l, &h, [-0.4 * DC, 0.01 * DC], 1e-6 * DC, Branch::Unloading);
-        let k = h.t_max / h.delta_max;
+        let k = l.envelope(h.delta_max) / h.delta_max; // eq. 24: t_max / delta_max
         let p = l.evaluate(&h, [0.4 * DC, 0.5 * DC], LEN);
         let expected = Matrix2::new(k * 0.707 * 0.707, 0.0, 0.0, k);
         assert!((p.tangent - expected).norm() <= 1e-15 * expected.norm());
@@ -435,7 +446,7 @@ mod tests {
                 penalty,
                 ..law(true)
             };
-            for h in [CohesiveHistory::default(), loaded_to(&l, 2.0 * DC)] {
+            for h in [CohesiveHistory::default(), loaded_to(2.0 * DC)] {
                 check_tangent(&l, &h, [0.2 * DC, -0.1 * DC], 1e-6 * DC, Branch::Contact);
                 let p = l.evaluate(&h, [0.2 * DC, -0.1 * DC], LEN);
                 let kp = l.contact_stiffness(LEN);
@@ -459,7 +470,7 @@ mod tests {
             ..law(true)
         };
         let kp = l.contact_stiffness(LEN);
-        let damaged = loaded_to(&l, 1.5 * DC);
+        let damaged = loaded_to(1.5 * DC);
         // (history, jump, branch of the sliding)
         for (h, jump, sliding_loads) in [
             (CohesiveHistory::default(), [0.4 * DC, -0.1 * DC], true),
@@ -477,11 +488,10 @@ mod tests {
             assert!((p.opening - l.beta * jump[0].abs()).abs() < 1e-18);
             if sliding_loads {
                 assert_eq!(p.history.delta_max, p.opening);
-                assert_eq!(p.history.t_max, l.envelope(p.opening));
             } else {
                 assert_eq!(p.history, h);
             }
-            let k = p.history.t_max / p.history.delta_max;
+            let k = l.envelope(p.history.delta_max) / p.history.delta_max;
             let secant = l.secant_matrix(&p);
             assert!((secant[(0, 0)] - k * l.beta * l.beta).abs() <= 1e-12 * k);
             assert_eq!(secant[(1, 1)], kp);
@@ -493,7 +503,7 @@ mod tests {
     /// `(k_p - k beta^2) delta_s`, the reason the option exists).
     #[test]
     fn closure_continuity_of_the_two_contact_shears() {
-        let damaged = loaded_to(&law(true), 1.5 * DC);
+        let damaged = loaded_to(1.5 * DC);
         let ds = 0.5 * DC;
         let tiny = 1e-12 * DC;
         for (shear, continuous) in [
@@ -512,7 +522,7 @@ mod tests {
             if continuous {
                 assert!(jump < 1e-6, "{shear:?}: jump {jump:e}");
             } else {
-                let k = damaged.t_max / damaged.delta_max;
+                let k = l.envelope(damaged.delta_max) / damaged.delta_max;
                 let expected = (l.contact_stiffness(LEN) - k * l.beta * l.beta) * ds;
                 assert!(
                     ((closed.traction.x - open.traction.x) - expected).abs()
@@ -612,14 +622,14 @@ mod tests {
             + p.traction[1] * p.traction[1])
             .sqrt();
         assert!((t_eff - l.envelope(p.opening)).abs() < 1e-12 * t_eff);
-        assert!((p.history.t_max - t_eff).abs() < 1e-12 * t_eff);
+        assert!((l.t_max(&p.history) - t_eff).abs() < 1e-12 * t_eff);
     }
 
     #[test]
     fn traction_continuous_at_delta_max() {
         let l = law(true);
         for dmax in [0.3 * DC, DC, 2.5 * DC] {
-            let h = loaded_to(&l, dmax);
+            let h = loaded_to(dmax);
             // Direction (beta ds, dn) = dmax (0.6, 0.8).
             let dir = [0.6 / 0.707, 0.8];
             let at = |f: f64| {
@@ -635,7 +645,7 @@ mod tests {
             assert!((above.traction - on.traction).norm() < 1e-10 * scale);
             // The history does not move when reloading exactly to delta_max.
             assert!((on.history.delta_max - dmax).abs() <= 1e-15 * dmax);
-            assert!((on.history.t_max - h.t_max).abs() <= 1e-14 * h.t_max);
+            assert!((l.t_max(&on.history) - l.t_max(&h)).abs() <= 1e-14 * l.t_max(&h));
         }
     }
 
@@ -653,15 +663,14 @@ mod tests {
         // Load to 0.5 delta_c and 1.5 delta_c.
         let (_, h) = step(dir(0.5 * DC), Branch::Loading);
         assert!((h.delta_max - 0.5 * DC).abs() < 1e-15);
-        assert!((h.t_max - l.envelope(0.5 * DC)).abs() < 1e-14);
         let (_, h15) = step(dir(1.5 * DC), Branch::Loading);
-        assert!((h15.t_max - l.envelope(1.5 * DC)).abs() < 1e-14);
-        assert!(h15.t_max < 4.0);
+        assert!((h15.delta_max - 1.5 * DC).abs() < 1e-15);
+        assert!(l.t_max(&h15) < 4.0);
         // Unload to 0.7 delta_c: secant, history unchanged.
         let (p, h) = step(dir(0.7 * DC), Branch::Unloading);
         assert_eq!(h, h15);
         let t_eff = (p.traction[0] / 0.707).hypot(p.traction[1]);
-        assert!((t_eff - h15.t_max / h15.delta_max * 0.7 * DC).abs() < 1e-12);
+        assert!((t_eff - l.t_max(&h15) / h15.delta_max * 0.7 * DC).abs() < 1e-12);
         // Close the crack with some sliding: contact, history frozen.
         let (p, h) = step([0.5 * DC, -0.01 * DC], Branch::Contact);
         assert_eq!(h, h15);
@@ -671,14 +680,13 @@ mod tests {
         assert_eq!(h, h15);
         let (p, h) = step(dir(2.0 * DC), Branch::Loading);
         assert!((h.delta_max - 2.0 * DC).abs() < 1e-15);
-        assert!((h.t_max - l.envelope(2.0 * DC)).abs() < 1e-14);
         assert!((p.opening - 2.0 * DC).abs() < 1e-15);
     }
 
     #[test]
     fn contact_off_is_symmetric() {
         let l = law(false);
-        let h = loaded_to(&l, 0.8 * DC);
+        let h = loaded_to(0.8 * DC);
         for (hist, branch) in [
             (CohesiveHistory::default(), Branch::Loading),
             (h, Branch::Unloading),

@@ -12,7 +12,8 @@ pub struct State {
     pub strain: [f64; 3],
     /// Unknowns: reduced fluctuation dofs, then the multipliers of the minimal BC.
     pub unknowns: Vec<f64>,
-    /// `(delta_max, t_max)` per interface quadrature point, element-major.
+    /// `delta_max` per interface quadrature point, element-major (`t_max` follows from it,
+    /// see [`CohesiveHistory`]).
     #[serde(with = "history_serde")]
     pub history: Vec<CohesiveHistory>,
 }
@@ -42,22 +43,46 @@ impl State {
     }
 }
 
-/// History as flat `[delta_max, t_max]` pairs (the kernel type has no serde derive).
+/// History as a flat list of `delta_max` (the kernel type has no serde derive).
 mod history_serde {
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
     use crate::interface::CohesiveHistory;
 
     pub fn serialize<S: Serializer>(h: &[CohesiveHistory], s: S) -> Result<S::Ok, S::Error> {
-        let flat: Vec<[f64; 2]> = h.iter().map(|p| [p.delta_max, p.t_max]).collect();
+        let flat: Vec<f64> = h.iter().map(|p| p.delta_max).collect();
         flat.serialize(s)
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<CohesiveHistory>, D::Error> {
-        let flat = Vec::<[f64; 2]>::deserialize(d)?;
+        let flat = Vec::<f64>::deserialize(d)?;
         Ok(flat
             .into_iter()
-            .map(|[delta_max, t_max]| CohesiveHistory { delta_max, t_max })
+            .map(|delta_max| CohesiveHistory { delta_max })
             .collect())
+    }
+}
+
+/// The state as format 1 of the state bytes stored it: history as `[delta_max, t_max]`
+/// pairs. Read by [`crate::ffi`]'s decoder so that saved checkpoints stay loadable; the
+/// `t_max` column is dropped (it is `t(delta_max)` by construction).
+#[derive(Deserialize)]
+pub struct StateFormat1 {
+    pub strain: [f64; 3],
+    pub unknowns: Vec<f64>,
+    pub history: Vec<[f64; 2]>,
+}
+
+impl From<StateFormat1> for State {
+    fn from(old: StateFormat1) -> Self {
+        State {
+            strain: old.strain,
+            unknowns: old.unknowns,
+            history: old
+                .history
+                .into_iter()
+                .map(|[delta_max, _t_max]| CohesiveHistory { delta_max })
+                .collect(),
+        }
     }
 }
