@@ -1174,3 +1174,84 @@ fn cohesive_contact_shear_reaches_equilibrium_with_sliding() {
         FD_STEP,
     );
 }
+
+/// Perfect bonding (no ITZ): the RVE is linear, and an update is answered from the model's
+/// elastic sensitivity, with no assembly or factorization. It must equal the general path
+/// (Newton from the committed state with a fresh factorization, forced here by giving the
+/// solver no sensitivity) for every BC and plane state, on a two-phase RVE, after a
+/// committed first step.
+#[test]
+fn perfect_bonding_is_answered_without_a_factorization() {
+    use rve::solver::{solve_increment, Problem};
+    for analysis in ANALYSES {
+        for bc in BCS {
+            let model = paper_rve(
+                bc,
+                &[
+                    ("cohesive = true", "cohesive = false"),
+                    ("contact = true", "contact = false"),
+                    (
+                        "analysis = \"plane_stress\"",
+                        &format!("analysis = \"{analysis}\""),
+                    ),
+                ],
+            );
+            assert!(model.disc.interfaces.is_empty());
+            let mut ws = model.workspace();
+            let mut inst = Instance::new(model.clone());
+            inst.update([1e-4, -3e-5, 0.0], &mut ws, TangentRequest::Consistent)
+                .unwrap();
+            inst.commit().unwrap();
+            let eps = [2e-4, 5e-5, -7e-5];
+            let fast = inst
+                .update(eps, &mut ws, TangentRequest::Consistent)
+                .unwrap();
+            assert_eq!(fast.report.factorizations, 0, "{bc} {analysis}");
+            assert_eq!(fast.report.iterations, 0, "{bc} {analysis}");
+            // Linear: the stress is the elastic tangent times the strain.
+            let d = mat(&model.elastic_tangent);
+            let linear = d * nalgebra::Vector3::from(eps);
+            let scale = linear.norm();
+            for i in 0..3 {
+                assert!(
+                    (fast.stress[i] - linear[i]).abs() <= 1e-12 * scale,
+                    "{bc} {analysis}: {:?} vs {linear:?}",
+                    fast.stress
+                );
+            }
+            assert!(rel_diff(&fast.tangent, &model.elastic_tangent) < 1e-14);
+            // The general path, from the same committed state.
+            let problem = Problem {
+                disc: &model.disc,
+                hom: &model.hom,
+                linear: &model.linear,
+                settings: &model.solver,
+                predictor: &[],
+            };
+            let mut trial = model.new_state();
+            let mut tangent = [0.0; 9];
+            let report = solve_increment(
+                &problem,
+                inst.committed(),
+                eps,
+                TangentRequest::Consistent,
+                &mut ws,
+                &mut trial,
+                &mut tangent,
+            )
+            .unwrap();
+            if bc != "taylor" {
+                assert!(report.factorizations >= 1, "{bc} {analysis}: {report:?}");
+            }
+            let (stress, _) = model.hom.stress(&model.disc, &eps, &trial.unknowns);
+            for i in 0..3 {
+                assert!(
+                    (fast.stress[i] - stress[i]).abs() <= 1e-10 * scale,
+                    "{bc} {analysis}: fast {:?}, Newton {stress:?}",
+                    fast.stress
+                );
+            }
+            assert!(rel_diff(&fast.tangent, &tangent) < 1e-12, "{bc} {analysis}");
+        }
+    }
+}

@@ -376,11 +376,11 @@ fn predict(
         None,
     );
     let before = norm(&ws.r_try);
-    let (p0, rest) = problem.predictor.split_at(n);
-    let (p1, p2) = rest.split_at(n);
-    for (i, t) in ws.x_try.iter_mut().enumerate() {
-        *t = x[i] + p0[i] * step[0] + p1[i] * step[1] + p2[i] * step[2];
-    }
+    sensitivity_times(problem.predictor, step, &mut ws.x_try);
+    ws.x_try
+        .iter_mut()
+        .zip(x.iter())
+        .for_each(|(t, xi)| *t += xi);
     disc.evaluate(
         &ws.x_try,
         target,
@@ -423,6 +423,14 @@ pub fn solve_increment(
         if request == TangentRequest::Consistent {
             *tangent = hom.tangent(disc, &[]);
         }
+        return Ok(report);
+    }
+    if disc.interfaces.is_empty() && problem.predictor.len() == 3 * disc.n() {
+        // No ITZ (perfect bonding): the RVE is linear and `x = X_el eps` exactly, with the
+        // model's elastic sensitivity; no assembly, no factorization (DESIGN.md section 5:
+        // effects a scene does not call for cost nothing).
+        linear_response(problem, eps, request, ws, trial, tangent);
+        report.substeps = 1;
         return Ok(report);
     }
     let start = committed.strain;
@@ -562,6 +570,36 @@ pub fn solve_increment(
     report.lu_factorizations = (ws.factor.lu_count - lu_before) as u32;
     report.lblt_factorizations = (ws.factor.lblt_count - lblt_before) as u32;
     Ok(report)
+}
+
+/// `out = X d` for a sensitivity `X` (n x 3, column-major) and a strain `d`.
+fn sensitivity_times(sensitivity: &[f64], d: &[f64; 3], out: &mut [f64]) {
+    let n = out.len();
+    let (x0, rest) = sensitivity.split_at(n);
+    let (x1, x2) = rest.split_at(n);
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = x0[i] * d[0] + x1[i] * d[1] + x2[i] * d[2];
+    }
+}
+
+/// The exact response of an RVE without interfaces: `x = X_el eps` from the model's
+/// elastic sensitivity `X_el = -K^-1 G`, and `D_hom` from `K^-1 G = -X_el` (eq. 18).
+fn linear_response(
+    problem: &Problem,
+    eps: [f64; 3],
+    request: TangentRequest,
+    ws: &mut Workspace,
+    trial: &mut State,
+    tangent: &mut [f64; 9],
+) {
+    sensitivity_times(problem.predictor, &eps, &mut trial.unknowns);
+    trial.strain = eps;
+    if request == TangentRequest::Consistent {
+        for (kg, p) in ws.kg.iter_mut().zip(problem.predictor) {
+            *kg = -p;
+        }
+        *tangent = problem.hom.tangent(problem.disc, &ws.kg);
+    }
 }
 
 /// Computes `ws.kg = K^-1 G` at the converged state (`ws.k`), reusing the last
