@@ -1,0 +1,692 @@
+"""Writes docs/paper_examples.md and its SVG plots from the runs of scripts/paper-examples.
+
+Usage: python3 scripts/paper_examples_report.py WORK OUT.md SVG_DIR
+
+WORK holds one directory per run (response.csv of `rve run`, status: "ok" or the error).
+Standard library only; the plots are plain SVG. The verdicts use the same measures and
+thresholds as tests/paper_examples.rs, which asserts them.
+"""
+
+import csv
+import math
+import os
+import sys
+
+WORK, MD, SVG_DIR = sys.argv[1:4]
+SVG_REL = os.path.relpath(SVG_DIR, os.path.dirname(MD))
+FIG10 = 4.8
+
+
+# ----------------------------------------------------------------------------- data
+class Run:
+    def __init__(self, name):
+        self.name = name
+        with open(os.path.join(WORK, name, "response.csv")) as f:
+            self.rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+        with open(os.path.join(WORK, name, "status")) as f:
+            self.status = f.read().strip()
+        self.ok = self.status == "ok"
+
+    def col(self, key):
+        return [r[key] for r in self.rows]
+
+    def __getitem__(self, k):  # increment k, 1-based
+        return self.rows[k - 1]
+
+    def __len__(self):
+        return len(self.rows)
+
+    def failure(self):
+        """'fails at increment k: reason' of a failed run."""
+        reason = self.status.replace("rve: error: RVE solver failed: ", "").split(" (after")[0]
+        return f"fails at increment {len(self.rows) + 1}: {reason}"
+
+
+RUNS = {}
+
+
+def run(name):
+    if name not in RUNS:
+        RUNS[name] = Run(name)
+    return RUNS[name]
+
+
+def limit_point(name, comp):
+    """Largest stress before it drops 5 % below its running maximum (tests' rule)."""
+    best, at = -math.inf, None
+    for r in run(name).rows:
+        s = r[comp]
+        if s > best:
+            best, at = s, r
+        if s < 0.95 * best:
+            break
+    return best, at["eps_xx"] + at["eps_yy"]
+
+
+def rel(a, b):
+    return abs(a - b) / abs(b)
+
+
+def pct(x, digits=2):
+    return f"{100 * x:.{digits}g} %"
+
+
+def more_less(x, more="higher", less="lower"):
+    """'2.1 % higher' / '0.64 % lower' for a relative change x."""
+    return f"{pct(abs(x))} {more if x > 0 else less}"
+
+
+# ----------------------------------------------------------------------------- markdown
+OUT = []
+
+
+def w(*lines):
+    OUT.extend(lines)
+
+
+def table(headers, rows):
+    w("| " + " | ".join(headers) + " |", "|" + "|".join("---" for _ in headers) + "|")
+    for r in rows:
+        w("| " + " | ".join(str(c) for c in r) + " |")
+    w("")
+
+
+def e(x):
+    return f"{x:.3e}"
+
+
+def f4(x):
+    return f"{x:.4f}"
+
+
+def f0(x):
+    return f"{x:.0f}"
+
+
+# ----------------------------------------------------------------------------- SVG
+COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#17becf"]
+
+
+def nice_step(span, n=6):
+    raw = span / n
+    mag = 10 ** math.floor(math.log10(raw))
+    for m in (1, 2, 2.5, 5, 10):
+        if raw <= m * mag:
+            return m * mag
+    return 10 * mag
+
+
+def ticks(lo, hi):
+    step = nice_step(hi - lo)
+    first, last = math.floor(lo / step + 1e-9), math.ceil(hi / step - 1e-9)
+    return [round(k * step, 12) for k in range(first, last + 1)]
+
+
+def plot(fname, title, xlabel, ylabel, series, hlines=(), marks=()):
+    """series: (label, xs, ys, dashed). hlines: (y, label). marks: (x, y, label)."""
+    W, H, L, R, T, B = 740, 420, 70, 210, 34, 48
+    xs = [x for s in series for x in s[1]] + [m[0] for m in marks]
+    ys = [y for s in series for y in s[2]] + [h[0] for h in hlines] + [m[1] for m in marks]
+    xt, yt = ticks(min(xs + [0]), max(xs + [0])), ticks(min(ys + [0]), max(ys + [0]))
+    x0, x1, y0, y1 = xt[0], xt[-1], yt[0], yt[-1]
+
+    def px(x):
+        return L + (x - x0) / (x1 - x0) * (W - L - R)
+
+    def py(y):
+        return H - B - (y - y0) / (y1 - y0) * (H - T - B)
+
+    g = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" '
+        f'viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">',
+        f'<rect width="{W}" height="{H}" fill="white"/>',
+        f'<text x="{L}" y="20" font-size="14">{title}</text>',
+    ]
+    for t in xt:
+        g.append(f'<line x1="{px(t):.1f}" y1="{T}" x2="{px(t):.1f}" y2="{H - B}" stroke="#e4e4e4"/>')
+        g.append(f'<text x="{px(t):.1f}" y="{H - B + 16}" text-anchor="middle">{t:g}</text>')
+    for t in yt:
+        g.append(f'<line x1="{L}" y1="{py(t):.1f}" x2="{W - R}" y2="{py(t):.1f}" stroke="#e4e4e4"/>')
+        g.append(f'<text x="{L - 6}" y="{py(t) + 4:.1f}" text-anchor="end">{t:g}</text>')
+    g.append(f'<rect x="{L}" y="{T}" width="{W - L - R}" height="{H - T - B}" fill="none" stroke="black"/>')
+    if x0 < 0 < x1:
+        g.append(f'<line x1="{px(0):.1f}" y1="{T}" x2="{px(0):.1f}" y2="{H - B}" stroke="#999"/>')
+    if y0 < 0 < y1:
+        g.append(f'<line x1="{L}" y1="{py(0):.1f}" x2="{W - R}" y2="{py(0):.1f}" stroke="#999"/>')
+    g.append(f'<text x="{(L + W - R) / 2}" y="{H - 10}" text-anchor="middle">{xlabel}</text>')
+    g.append(
+        f'<text x="16" y="{(T + H - B) / 2}" text-anchor="middle" '
+        f'transform="rotate(-90 16 {(T + H - B) / 2})">{ylabel}</text>'
+    )
+    for y, label in hlines:
+        g.append(
+            f'<line x1="{L}" y1="{py(y):.1f}" x2="{W - R}" y2="{py(y):.1f}" stroke="black" '
+            f'stroke-dasharray="2 3"/><text x="{L + 4}" y="{py(y) - 4:.1f}">{label}</text>'
+        )
+    for k, (label, sx, sy, dashed) in enumerate(series):
+        c = COLORS[k % len(COLORS)]
+        pts = " ".join(f"{px(x):.1f},{py(y):.1f}" for x, y in zip(sx, sy))
+        dash = ' stroke-dasharray="6 4"' if dashed else ""
+        g.append(f'<polyline points="{pts}" fill="none" stroke="{c}" stroke-width="1.6"{dash}/>')
+        for x, y in zip(sx, sy):
+            g.append(f'<circle cx="{px(x):.1f}" cy="{py(y):.1f}" r="1.8" fill="{c}"/>')
+        ly = T + 14 + 18 * k
+        g.append(
+            f'<line x1="{W - R + 10}" y1="{ly - 4}" x2="{W - R + 34}" y2="{ly - 4}" '
+            f'stroke="{c}" stroke-width="2"{dash}/>'
+            f'<text x="{W - R + 40}" y="{ly}">{label}</text>'
+        )
+    for x, y, label in marks:
+        g.append(
+            f'<circle cx="{px(x):.1f}" cy="{py(y):.1f}" r="4.5" fill="none" stroke="black"/>'
+            f'<text x="{px(x) + 7:.1f}" y="{py(y) - 6:.1f}" font-size="11">{label}</text>'
+        )
+    g.append("</svg>")
+    with open(os.path.join(SVG_DIR, fname), "w") as f:
+        f.write("\n".join(g) + "\n")
+    w(f"![{title}]({SVG_REL}/{fname})", "")
+
+
+def with_origin(r, key):
+    return [0.0] + [1e4 * x for x in r.col(key)] if key.startswith("eps") or key == "gamma_xy" else [0.0] + r.col(key)
+
+
+def curve(label, r, xkey, ykey, dashed=False):
+    return (label, with_origin(r, xkey), with_origin(r, ykey), dashed)
+
+
+# ============================================================================ findings
+FINDINGS = []  # (where, claim, ours, verdict)
+
+
+def finding(where, claim, ours, verdict):
+    FINDINGS.append((where, claim, ours, verdict))
+    w(f"**Finding.** Paper: {claim} Ours: {ours} **Agreement: {verdict}.**", "")
+
+
+# ---------------------------------------------------------------------- section 5.1
+def section_5_1():
+    w("## 5.1 A single interface (Table 1)", "")
+    w(
+        "The paper's cell holds one interface element at its centre in a 14-triangle mesh; "
+        "`scenes/single_interface.toml` cuts a 2 x 2 mm cell by one straight full-height "
+        "ITZ (10 elements of 0.2 mm), plane strain, periodic BC, Table 1's parameters "
+        "(E = 30000, nu = 0.2, sigma_c = 4, delta_c = 2e-4, beta = 0.707, lambda_p = 1e7, "
+        "tolerance 1e-7). Its response has a closed form, which "
+        "`tests/closed_form_interface.rs` checks for every load case, every sigma_c and the "
+        "cycle; here are the paper's qualitative remarks on them.",
+        "",
+    )
+    d11 = 30000 * 0.8 / (1.2 * 0.6)
+    d12, g = 30000 * 0.2 / (1.2 * 0.6), 30000 / 2.4
+    w("### Fig. 7: sigma_c = 4, 40, 0.4 (load case 1, eps = [8e-5, 0, 0] in 20 increments)", "")
+    rows, ratios = [], {}
+    for sc in ("4.0", "40.0", "0.4"):
+        r = run(f"si_sc{sc}")
+        last = r[len(r)]
+        sec = last["sig_xx"] / last["eps_xx"] / d11
+        first = r[1]["D11"] / d11
+        ratios[sc] = (sec, first)
+        rows.append([sc, f4(last["sig_xx"]), f"{sec:.3f}", f"{first:.3f}", f"{last['D11'] / d11:.3f}"])
+    table(
+        ["sigma_c (N/mm²)", "s_xx at 8e-5", "secant / D11", "tangent at increment 1 / D11", "tangent at 8e-5 / D11"],
+        rows,
+    )
+    plot(
+        "fig7_sigma_c.svg",
+        "Fig. 7: single interface, load case 1",
+        "eps_xx x 1e4",
+        "s_xx (N/mm²)",
+        [curve(f"sigma_c = {sc}", run(f"si_sc{sc}"), "eps_xx", "sig_xx") for sc in ("4.0", "40.0", "0.4")],
+    )
+    s40, s04, t04 = ratios["40.0"][0], ratios["0.4"][0], ratios["0.4"][1]
+    # The intact interface (initial stiffness e sigma_c / delta_c) in series with the cell.
+    series = 1.0 / (1.0 + d11 / (math.e * 40.0 / 2e-4 * 2.0))
+    ok = s40 > 0.95 and s04 < 0.25 and t04 < 0.3 and s40 > ratios["4.0"][0] > s04
+    finding(
+        "5.1, Fig. 7",
+        "sigma_c = 40 behaves like an elastic RVE, sigma_c = 0.4 like a strongly fractured "
+        "medium without a transition.",
+        f"secant at 8e-5: {s40:.3f} D11 (sigma_c = 40; the intact ITZ in series with the "
+        f"2 mm cell gives {series:.3f}), {ratios['4.0'][0]:.3f} D11 (4), {s04:.3f} D11 (0.4, already "
+        f"{t04:.3f} D11 at the first increment).",
+        "yes" if ok else "no",
+    )
+
+    w("### Fig. 6: load cases 1-3 (sigma_c = 4)", "")
+    w(
+        "Damage measure: the secant along the path, `s . eps / (eps . D_el . eps)` at the "
+        "end (1 = elastic; plane strain D_el).",
+        "",
+    )
+    cases = [("case 1", "si_sc4.0", [8e-5, 0, 0]), ("case 2", "si_case2", [8e-5, -8e-5, 0]),
+             ("case 3", "si_case3", [8e-5, -8e-5, 5e-4])]
+    rows, sec = [], []
+    for name, rn, eps in cases:
+        last = run(rn)[20]
+        s = [last["sig_xx"], last["sig_yy"], last["sig_xy"]]
+        num = sum(a * b for a, b in zip(s, eps))
+        den = d11 * (eps[0] ** 2 + eps[1] ** 2) + 2 * d12 * eps[0] * eps[1] + g * eps[2] ** 2
+        sec.append(num / den)
+        rows.append([name, str(eps), f"[{s[0]:.4f}, {s[1]:.4f}, {s[2]:.4f}]", f"{num / den:.3f}"])
+    table(["case", "eps (20 increments)", "stress at the end", "secant ratio"], rows)
+    plot(
+        "fig6_cases.svg",
+        "Fig. 6: load cases 1-3, s_xx",
+        "eps_xx x 1e4",
+        "s_xx (N/mm²)",
+        [curve(n, run(rn), "eps_xx", "sig_xx") for n, rn, _ in cases],
+    )
+    finding(
+        "5.1, Fig. 6",
+        "the RVE is more damaged when the loading conditions are increased (cases 1 to 3).",
+        f"secant ratios {sec[0]:.2f}, {sec[1]:.2f}, {sec[2]:.2f}: case 3 (shear) is by far "
+        "the most damaged, but case 2 is LESS damaged than case 1 (eps_yy < 0 lowers the "
+        "normal traction on the vertical ITZ through D12; the test finds the same order "
+        "with the largest opening delta_max).",
+        "partly" if sec[2] < 0.5 * min(sec[:2]) and sec[1] > sec[0] else "check",
+    )
+
+    w("### Fig. 8: the cycle to [8e-5, -8e-5, 5e-4], then to [-4e-5, -4e-5, -2.5e-4]", "")
+    r = run("si_cycle")
+    rows = [[k, e(r[k]["eps_xx"]), e(r[k]["gamma_xy"]), f4(r[k]["sig_xx"]), f4(r[k]["sig_xy"]),
+             f0(r[k]["D11"]), f0(r[k]["D33"]), f0(r[k]["loading_points"]), f0(r[k]["unloading_points"]),
+             f0(r[k]["contact_points"])] for k in (1, 10, 20, 21, 30, 31, 32, 40)]
+    table(["increment", "eps_xx", "gamma_xy", "s_xx", "s_xy", "D11", "D33", "loading", "unloading", "contact"], rows)
+    plot(
+        "fig8_cycle.svg",
+        "Fig. 8: single interface, cycle",
+        "strain x 1e4",
+        "stress (N/mm²)",
+        [curve("s_xx vs eps_xx", r, "eps_xx", "sig_xx"), curve("s_xy vs gamma_xy", r, "gamma_xy", "sig_xy")],
+    )
+    closed = [k for k in range(1, len(r) + 1) if r[k]["contact_points"] > 0]
+    pen = 1.0 / (1.0 / d11 + 1.0 / (1e7 * 0.2 * 2.0))
+    finding(
+        "5.1, Fig. 8",
+        "the element closes and the unilateral effect is captured; the cohesive-contact "
+        "transition is satisfactory.",
+        f"every ITZ point is closed from increment {closed[0]} on; the compression D11 is "
+        f"{r[40]['D11']:.0f} (the cell with the penalty lambda_p l_e in series: {pen:.0f}). "
+        f"The paper's law makes the shear stress jump at closure (s_xy "
+        f"{r[closed[0] - 1]['sig_xy']:.2f} to {r[closed[0]]['sig_xy']:.2f}): sliding is "
+        "penalised from the reference configuration.",
+        "yes" if closed and all(r[k]["contact_points"] > 0 for k in range(closed[0], len(r) + 1))
+        and rel(r[40]["D11"], pen) < 1e-3 else "no",
+    )
+
+
+# ---------------------------------------------------------------------- section 5.2.1
+def section_5_2_1():
+    w("## 5.2.1 Elastic-fracture behaviour (Table 2, Figs. 9-15)", "")
+    w(
+        "The RVE of Fig. 9 is `scenes/paper_rve.toml`: 10 x 10 mm, 45 % circular aggregates "
+        "of 2.5-5.0 mm (four of them, seed 7), 532 triangles, 96 ITZ elements (the paper: "
+        "520 and 95), plane stress, periodic BC, lambda_p = 1e5.",
+        "",
+    )
+    el = run("el_circles")[1]
+    x, y = run("x"), run("y")
+    px, ex = limit_point("lp_x", "sig_xx")
+    py_, ey = limit_point("lp_y", "sig_yy")
+
+    w("### Fig. 10: eps = [2.2e-4, 0, 0] in 20 increments", "")
+    rows = [[k, e(x[k]["eps_xx"]), f4(x[k]["sig_xx"]), f4(x[k]["sig_yy"]), f0(x[k]["D11"]),
+             f0(x[k]["iterations"]), f0(x[k]["substeps"]),
+             f"{x[k]['loading_points']:.0f}/{x[k]['unloading_points']:.0f}/{x[k]['contact_points']:.0f}"]
+            for k in range(1, 21)]
+    table(["increment", "eps_xx", "s_xx", "s_yy", "D11", "iterations", "substeps",
+           "ITZ points loading/unloading/contact"], rows)
+    lp = run("lp_x")
+    plot(
+        "fig10_x.svg",
+        "Fig. 10: eps = [2.2e-4, 0, 0]",
+        "eps_xx x 1e4",
+        "s_xx (N/mm²)",
+        [curve("20 increments", x, "eps_xx", "sig_xx"),
+         curve("limit-point path", lp, "eps_xx", "sig_xx", True)],
+        hlines=[(FIG10, "paper's close-up, 4.8 N/mm²")],
+        marks=[(1e4 * ex, px, f"{px:.3f}")],
+    )
+    others = {
+        "eps_yy": py_,
+        "linear BC": limit_point("lp_x_linear", "sig_xx")[0],
+        "fine mesh": limit_point("lp_fine", "sig_xx")[0],
+        "ellipses (same centres)": limit_point("lp_ellipses_same", "sig_xx")[0],
+        "ellipses (other sample)": limit_point("lp_ellipses_sample", "sig_xx")[0],
+    }
+    top = max(others.values())
+    finding(
+        "5.2.1, Fig. 10",
+        "a close-up of the ITZ cracks is taken at sigma_x = 4.8 N/mm² (so the paper's RVE "
+        "reaches at least that stress).",
+        f"the limit point is {px:.3f} N/mm² at eps_xx = {ex:.3e} ({pct(1 - px / FIG10)} below "
+        f"4.8); the largest stress of the 20-increment path is {max(x.col('sig_xx')):.3f}. "
+        f"No variant reaches 4.8 (largest: {top:.3f}, "
+        + ", ".join(f"{k} {v:.3f}" for k, v in others.items())
+        + "). Same order, not the same value: the paper's RVE is another random sample and mesh.",
+        "no (order of magnitude yes)" if px < FIG10 else "yes",
+    )
+    w(
+        f"The nonlinearity before the peak (the secant is "
+        f"{pct(1 - x[18]['sig_xx'] / x[18]['eps_xx'] / el['D11'])} below the virgin stiffness "
+        "at increment 18) comes with no ITZ point past delta_c (the peak of the "
+        "traction-separation law) while the stress is below 90 % of the peak: the intrinsic "
+        "law softens every point from the start. Points past delta_c appear in the last "
+        "increments before the peak and multiply at the snap after it "
+        "(`fig_10_peak_is_of_the_order_of_4_8` asserts both); after the snap most ITZ "
+        "points unload (table above): the crack has localised.",
+        "",
+    )
+
+    w("### Newton iterations", "")
+    # Away from the peak: before the largest stress of the 5.2.1 path, and the unloading
+    # and compression branches of the cycle (increments 21-60).
+    cyc = run("cycle")
+    top = max(range(1, 21), key=lambda k: x[k]["sig_xx"])
+    away = [x[k]["iterations"] for k in range(1, top + 1)]
+    away += [cyc[k]["iterations"] for k in range(21, 61)]
+    pre = max(away)
+    rows = []
+    for name, label in [("x", "Fig. 10, eps_xx"), ("y", "Fig. 11, eps_yy"), ("fine", "Fig. 13, fine mesh"),
+                        ("ellipses_sample", "Fig. 15, ellipses"), ("cycle", "Fig. 16, cycle")]:
+        r = run(name)
+        its = r.col("iterations")
+        worst = max(range(len(its)), key=lambda k: its[k])
+        rows.append([label, len(r), sum(1 for i in its if i <= 4), f"{its[worst]:.0f} (increment {worst + 1})",
+                     f0(max(r.col("substeps")))])
+    table(["path", "increments", "with <= 4 iterations", "most iterations", "most substeps"], rows)
+    finding(
+        "5.2.2 (end)",
+        "up to four Newton iterations per increment, quadratic convergence.",
+        f"at most {pre:.0f} iterations before the peak and on the cycle's unloading and "
+        "compression branches (quadratic: `tests/newton_convergence.rs`), but the increment that "
+        "crosses the snap-back after the peak takes tens to hundreds of iterations and "
+        "sub-steps (table).",
+        "before and after the peak, not across it" if pre <= 4 else "no",
+    )
+
+    w("### Fig. 11: anisotropy, eps = [2.2e-4, 0, 0] vs [0, 2.2e-4, 0]", "")
+    rows = [[k, e(x[k]["eps_xx"]), f4(x[k]["sig_xx"]), f4(y[k]["sig_yy"]),
+             pct(rel(y[k]["sig_yy"], x[k]["sig_xx"])), f0(x[k]["D11"]), f0(y[k]["D22"])]
+            for k in (1, 5, 10, 15, 17, 18, 19, 20)]
+    table(["increment", "eps", "s_xx (x path)", "s_yy (y path)", "difference", "D11 (x)", "D22 (y)"], rows)
+    table(["", "x", "y", "difference"],
+          [["virgin tangent D11 / D22", f0(el["D11"]), f0(el["D22"]), f"{rel(el['D22'], el['D11']):.1e}"],
+           ["limit point (N/mm²)", f4(px), f4(py_), pct(rel(py_, px))],
+           ["strain at the limit point", e(ex), e(ey), pct(rel(ey, ex))]])
+    plot(
+        "fig11_anisotropy.svg",
+        "Fig. 11: loading along x and along y",
+        "eps x 1e4",
+        "stress (N/mm²)",
+        [curve("x: s_xx(eps_xx)", x, "eps_xx", "sig_xx"), curve("y: s_yy(eps_yy)", y, "eps_yy", "sig_yy"),
+         curve("x, limit-point path", run("lp_x"), "eps_xx", "sig_xx", True),
+         curve("y, limit-point path", run("lp_y"), "eps_yy", "sig_yy", True)],
+        marks=[(1e4 * ex, px, "x"), (1e4 * ey, py_, "y")],
+    )
+    half = max(rel(y[k]["sig_yy"], x[k]["sig_xx"]) for k in range(1, 11))
+    atp = rel(py_, px)
+    finding(
+        "5.2.1, Fig. 11",
+        "the responses along x and y differ only in the peak region.",
+        f"virgin D11 and D22 within {rel(el['D22'], el['D11']):.0e}, the curves within "
+        f"{half:.1e} up to eps = 1.1e-4; the limit points differ by {pct(atp)} "
+        f"({px:.3f} vs {py_:.3f}) and the stresses at 2.2e-4 by "
+        f"{pct(rel(y[20]['sig_yy'], x[20]['sig_xx']))}.",
+        "yes" if atp > 0.01 and atp > 10 * max(half, rel(el["D22"], el["D11"])) else "no",
+    )
+
+    w("### Fig. 13: mesh objectivity, 532 vs 8176 triangles (96 vs 362 ITZ elements)", "")
+    w(
+        "The paper's fine mesh has 8088 triangles and 364 ITZ elements and uses linear BC; "
+        "here both BCs, `scenes/paper_rve_fine.toml` and `scenes/paper/rve_fine_linear.toml`.",
+        "",
+    )
+    fine, xl, fl = run("fine"), run("x_linear"), run("fine_linear")
+    rows = [[k, e(x[k]["eps_xx"]), f4(x[k]["sig_xx"]), f4(fine[k]["sig_xx"]),
+             pct(rel(fine[k]["sig_xx"], x[k]["sig_xx"])), f4(xl[k]["sig_xx"]), f4(fl[k]["sig_xx"]),
+             pct(rel(fl[k]["sig_xx"], xl[k]["sig_xx"]))] for k in (1, 5, 10, 15, 17, 18, 19, 20)]
+    table(["increment", "eps_xx", "coarse, periodic", "fine, periodic", "difference",
+           "coarse, linear", "fine, linear", "difference"], rows)
+    lpf, lpfl, lpxl = (limit_point("lp_fine", "sig_xx"), limit_point("lp_fine_linear", "sig_xx"),
+                       limit_point("lp_x_linear", "sig_xx"))
+    elf = run("el_fine")[1]
+    table(["", "coarse, periodic", "fine, periodic", "coarse, linear", "fine, linear"],
+          [["virgin D11", f0(el["D11"]), f0(elf["D11"]), f0(run("el_linear")[1]["D11"]),
+            f0(run("el_fine_linear")[1]["D11"])],
+           ["limit point (N/mm²)", f4(px), f4(lpf[0]), f4(lpxl[0]), f4(lpfl[0])],
+           ["at eps_xx", e(ex), e(lpf[1]), e(lpxl[1]), e(lpfl[1])]])
+    plot(
+        "fig13_mesh.svg",
+        "Fig. 13: coarse and fine meshes",
+        "eps_xx x 1e4",
+        "s_xx (N/mm²)",
+        [curve("coarse, periodic", x, "eps_xx", "sig_xx"), curve("fine, periodic", fine, "eps_xx", "sig_xx"),
+         curve("coarse, linear", xl, "eps_xx", "sig_xx", True),
+         curve("fine, linear", fl, "eps_xx", "sig_xx", True)],
+    )
+    pre_p = max(rel(fine[k]["sig_xx"], x[k]["sig_xx"]) for k in range(1, 19))
+    pre_l = max(rel(fl[k]["sig_xx"], xl[k]["sig_xx"]) for k in range(1, 19))
+    post_p = max(rel(fine[k]["sig_xx"], x[k]["sig_xx"]) for k in (19, 20))
+    post_l = max(rel(fl[k]["sig_xx"], xl[k]["sig_xx"]) for k in (19, 20))
+    finding(
+        "5.2.1, Fig. 13",
+        "the responses of the coarse and the fine mesh do not change.",
+        f"up to increment 18 (98 % of the peak) they agree within {pct(pre_p)} (periodic) "
+        f"and {pct(pre_l)} (linear); the fine mesh's limit point is {pct(rel(lpf[0], px))} "
+        f"lower; after the peak they differ by up to {pct(post_p)} (periodic: the coarse "
+        f"mesh snaps at 2.09e-4, the fine one later) and {pct(post_l)} (linear).",
+        "before the peak yes; after it no" if pre_p < 5e-3 and pre_l < 5e-3 and post_p > 0.1
+        else "check: the measures changed",
+    )
+
+    w("### Figs. 14-15: elliptic aggregates, eps = [3e-4, 0, 0] in 20 increments", "")
+    w(
+        "Two elliptic RVEs: `scenes/paper/rve_ellipses_same_centres.toml`, the paper's "
+        "construction (the four circles replaced by ellipses of aspect ratio 1.5 with the "
+        "same centres and areas; 550 triangles, 100 ITZ elements), and the shipped "
+        "`scenes/paper_rve_ellipses.toml`, an independent random sample (6 ellipses, seed 4; "
+        "846 triangles, 94 ITZ elements, the paper: 851 and 94).",
+        "",
+    )
+    c, s, r = run("circles_3e-4"), run("ellipses_same"), run("ellipses_sample")
+    rows = [[k, e(c[k]["eps_xx"]), f4(c[k]["sig_xx"]), f4(s[k]["sig_xx"]),
+             pct((s[k]["sig_xx"] - c[k]["sig_xx"]) / c[k]["sig_xx"]), f4(r[k]["sig_xx"]),
+             pct((r[k]["sig_xx"] - c[k]["sig_xx"]) / c[k]["sig_xx"])] for k in (1, 5, 10, 13, 14, 15, 17, 20)]
+    table(["increment", "eps_xx", "circles", "ellipses, same centres", "vs circles",
+           "ellipses, other sample", "vs circles"], rows)
+    els, elr = run("el_ellipses_same")[1], run("el_ellipses_sample")[1]
+    lps, lpr = limit_point("lp_ellipses_same", "sig_xx"), limit_point("lp_ellipses_sample", "sig_xx")
+    table(["", "circles", "ellipses, same centres", "ellipses, other sample"],
+          [["virgin D11", f0(el["D11"]), f0(els["D11"]), f0(elr["D11"])],
+           ["virgin D22", f0(el["D22"]), f0(els["D22"]), f0(elr["D22"])],
+           ["limit point (N/mm²)", f4(px), f4(lps[0]), f4(lpr[0])],
+           ["at eps_xx", e(ex), e(lps[1]), e(lpr[1])]])
+    plot(
+        "fig15_ellipses.svg",
+        "Fig. 15: circles and ellipses",
+        "eps_xx x 1e4",
+        "s_xx (N/mm²)",
+        [curve("circles", c, "eps_xx", "sig_xx"), curve("ellipses, same centres", s, "eps_xx", "sig_xx"),
+         curve("ellipses, other sample", r, "eps_xx", "sig_xx")],
+    )
+    deficit = sum(1 - s[k]["sig_xx"] / c[k]["sig_xx"] for k in range(14, 21)) / 7
+    tr = lambda d: d["D11"] + d["D22"]  # noqa: E731
+    finding(
+        "5.2.1, Fig. 15",
+        "the response is more flexible with elliptic than with circular aggregates.",
+        f"in the elastic range both elliptic RVEs are more compliant on average (D11 + D22 "
+        f"{more_less(tr(els) / tr(el) - 1)} and {more_less(tr(elr) / tr(el) - 1)}), but along x the "
+        f"same-centre ellipses are {more_less(els['D11'] / el['D11'] - 1, 'stiffer', 'softer')} "
+        f"and follow the circles within 0.5 % up to the peak; their limit point is "
+        f"{more_less(lps[0] / px - 1)} and past the peak they carry {pct(deficit)} less stress "
+        f"on average. The other sample is "
+        f"{more_less(elr['D11'] / el['D11'] - 1, 'stiffer', 'softer')} in D11 and lower before "
+        f"the peak, yet its limit point is {more_less(lpr[0] / px - 1)}.",
+        "partly (after the peak; on average in the elastic range)"
+        if tr(els) < tr(el) and tr(elr) < tr(el) and deficit > 0.1 and els["D11"] > el["D11"]
+        and lpr[0] > px else "check: the measures changed",
+    )
+
+
+# ---------------------------------------------------------------------- section 5.2.2
+def section_5_2_2():
+    w("## 5.2.2 Unilateral effect (Figs. 16-17)", "")
+    w(
+        "`scenes/paper_rve_cycle.toml`: the RVE of Fig. 9, eps = [2.3e-4, 0, 0] in 20 "
+        "increments, then to [-4.5e-4, 0, 0] in 40 (60 equal increments), tolerance 1e-6; "
+        "`scenes/paper/cycle_linear.toml` with linear BC.",
+        "",
+    )
+    el = run("el_circles")[1]
+    cp, cl = run("cycle"), run("cycle_linear")
+    rows = [[k, e(cp[k]["eps_xx"]), f4(cp[k]["sig_xx"]), f0(cp[k]["D11"]), f0(cp[k]["contact_points"]),
+             f4(cl[k]["sig_xx"]), f0(cl[k]["D11"]), f0(cl[k]["contact_points"])]
+            for k in (1, 10, 17, 18, 19, 20, 21, 27, 33, 34, 40, 50, 60)]
+    table(["increment", "eps_xx", "s_xx periodic", "D11 periodic", "closed", "s_xx linear", "D11 linear",
+           "closed"], rows)
+    plot(
+        "fig16_cycle.svg",
+        "Fig. 16: tension, unloading, compression",
+        "eps_xx x 1e4",
+        "s_xx (N/mm²)",
+        [curve("periodic", cp, "eps_xx", "sig_xx"), curve("linear", cl, "eps_xx", "sig_xx", True)],
+    )
+    unload = cp[21]["sig_xx"] / cp[21]["eps_xx"]
+    comp = cp[60]["D11"]
+    n_points = cp[1]["loading_points"] + cp[1]["unloading_points"] + cp[1]["contact_points"]
+    all_closed = all(cp[k]["contact_points"] == n_points for k in range(34, 61))
+    finding(
+        "5.2.2, Fig. 16",
+        "the unilateral effect: damaged unloading in tension, stiffness recovery when the "
+        "cracks close; no dissipation in compression.",
+        f"virgin D11 {el['D11']:.0f}; unloading secant to the origin {unload:.0f} "
+        f"({unload / el['D11']:.2f} of it); from increment 34 every ITZ point is closed and "
+        f"D11 = {comp:.0f} ({comp / el['D11']:.3f} of the virgin value) on a linear "
+        "compression branch (one iteration per increment).",
+        "yes" if unload < 0.7 * el["D11"] and rel(comp, el["D11"]) < 0.02 and all_closed else "no",
+    )
+    x, xl = run("x"), run("x_linear")
+    gap = [(xl[k]["sig_xx"] - x[k]["sig_xx"]) / x[k]["sig_xx"] for k in range(1, 21)]
+    elastic = (run("el_linear")[1]["D11"] - el["D11"]) / el["D11"]
+    exceptions = [k for k in range(1, 61)
+                  if cl[k]["sig_xx"] * math.copysign(1, cl[k]["eps_xx"])
+                  <= cp[k]["sig_xx"] * math.copysign(1, cp[k]["eps_xx"])]
+    w("Linear minus periodic on the section 5.2.1 path, relative to periodic:", "")
+    table(["increment"] + [str(k) for k in (1, 5, 10, 15, 18, 19, 20)],
+          [["s_xx gap"] + [f"{gap[k - 1]:.1e}" for k in (1, 5, 10, 15, 18, 19, 20)]])
+    pl, pp = limit_point("lp_x_linear", "sig_xx"), limit_point("lp_x", "sig_xx")
+    finding(
+        "5.2.2",
+        "periodic and linear BC give very similar responses at first and differ when "
+        "dissipation takes place; linear BC is the stiffest.",
+        f"linear is stiffer from the virgin tangent ({elastic:.1e}) through every increment "
+        f"of the 5.2.1 path (gap {gap[0]:.1e} at the first increment, {gap[17]:.1e} at "
+        f"increment 18, {pct(gap[18])} after the peak) and of the cycle except increment "
+        + ", ".join(str(k) for k in exceptions)
+        + f": there (eps_xx = {cp[18]['eps_xx']:.3e}) linear is already past its limit point "
+        f"({pl[1]:.4e}) and periodic not yet ({pp[1]:.4e}). The limit-point stresses differ "
+        f"by {pct(rel(pl[0], pp[0]))}.",
+        "yes" if all(g > 0 for g in gap) and elastic > 0 else "no",
+    )
+
+    w("### Fig. 17: penalty factor lambda_p = 1e4 ... 1e9 N/mm on the cycle", "")
+    w(
+        "With the paper's contact law (`contact_shear = \"penalty\"`, the default: penalty on "
+        "both components, sliding measured from the reference configuration) and with "
+        "`contact_shear = \"cohesive\"` (penalty on the normal only). Distance: the largest "
+        "|s_xx - s_xx(1e9)| over the cycle over the largest |s_xx(1e9)|, with the same law.",
+        "",
+    )
+    lps = ["1e4", "1e5", "1e6", "1e7", "1e8", "1e9"]
+    coh = {lp: run(f"pen_cohesive_{lp}") for lp in lps}
+    pap = {lp: run(f"pen_paper_{lp}") for lp in lps}
+    ref = coh["1e9"]
+    scale = max(abs(v) for v in ref.col("sig_xx"))
+    dist = {lp: max(abs(a - b) for a, b in zip(coh[lp].col("sig_xx"), ref.col("sig_xx"))) / scale for lp in lps}
+    rows = []
+    for lp in lps:
+        p, c = pap[lp], coh[lp]
+        rows.append([lp, f0(p[60]["D11"]) if p.ok else p.failure(), f0(c[60]["D11"]),
+                     f"{dist[lp]:.1e}", f0(c[34]["iterations"]), f0(sum(c.col("iterations")))])
+    table(["lambda_p (N/mm)", "paper's law: compression D11", "cohesive shear: compression D11",
+           "distance to 1e9", "iterations at closure (increment 34)", "iterations, whole cycle"], rows)
+    plot(
+        "fig17_penalty.svg",
+        "Fig. 17: penalty factor (contact_shear = cohesive)",
+        "eps_xx x 1e4",
+        "s_xx (N/mm²)",
+        [curve(f"lambda_p = {lp}", coh[lp], "eps_xx", "sig_xx", lp in ("1e8", "1e9")) for lp in lps],
+    )
+    failing = [lp for lp in lps if not pap[lp].ok]
+    finding(
+        "5.2.2, Fig. 17 (paper's contact law)",
+        "from lambda_p ~ 1e7 up the response no longer depends on the penalty; 1e7 is a "
+        "reasonable value; more iterations are needed to close the cracks with large values.",
+        f"with the paper's law the cycle fails for lambda_p = {', '.join(failing)}, in the "
+        "snap after the tension peak, where the first ITZ points close "
+        f"({failing[0] if failing else '-'}: {pap[failing[0]].failure() if failing else ''}). "
+        "With contact_shear = \"cohesive\" every value goes through, which points at the "
+        "paper's shear jump at closure (lambda_p l_e delta_s, sliding counted from the "
+        "reference configuration; README, `contact_shear`): the solver finds no equilibrium "
+        "across it. From 1e5 to 1e6 the compression D11 still changes by "
+        f"{pct(pap['1e6'][60]['D11'] / pap['1e5'][60]['D11'] - 1)}.",
+        "no (not computable from 1e7 up)" if failing else "yes",
+    )
+    conv = dist["1e7"] < 0.01 and dist["1e8"] < 1e-3 and all(
+        dist[lps[k + 1]] < dist[lps[k]] / 3 for k in range(4))
+    finding(
+        "5.2.2, Fig. 17 (contact_shear = \"cohesive\")",
+        "the same.",
+        f"distance to 1e9: {', '.join(f'{lp} {dist[lp]:.1e}' for lp in lps[:5])}: converged "
+        "from 1e7 up (first order in 1 / lambda_p); the closure increment takes "
+        f"{coh['1e5'][34]['iterations']:.0f} iterations at 1e5 and "
+        f"{coh['1e9'][34]['iterations']:.0f} at 1e9. The converged compression stiffness "
+        f"({coh['1e9'][60]['D11']:.0f}) is {pct(coh['1e9'][60]['D11'] / el['D11'] - 1)} above the "
+        "virgin one: a closed ITZ is stiffer than the intact intrinsic cohesive law.",
+        "yes" if conv else "no",
+    )
+
+
+# ============================================================================== write
+def main():
+    os.makedirs(SVG_DIR, exist_ok=True)
+    body = OUT
+    section_5_1()
+    section_5_2_1()
+    section_5_2_2()
+    head = [
+        "# The paper's numerical examples",
+        "",
+        "Pituba & Souza Neto (2015), sections 5.1 and 5.2, reproduced with mesorve. Generated "
+        "by `scripts/paper-examples` (do not edit by hand); every verdict below is asserted "
+        "by `tests/paper_examples.rs` (`cargo test --release --test paper_examples`); the "
+        "closure of Fig. 8 by `tests/closed_form_interface.rs`.",
+        "",
+        "Units: mm, N/mm². Strain `[eps_xx, eps_yy, gamma_xy]`, stress `[s_xx, s_yy, s_xy]`, "
+        "`D` the consistent tangent (`D11 = d s_xx / d eps_xx`). The paper gives curves, "
+        "not tables, so the comparison is with its statements.",
+        "",
+        "**Peaks.** Past the peak the RVE's equilibrium path has a snap-back, so the largest "
+        "stress of a 20-increment path depends on where the increments fall. Peaks here are "
+        "limit points: 16 increments to 1.76e-4 (every ITZ point is still on its loading "
+        "envelope, the state does not depend on the increments), then steps of 1.375e-6 "
+        "(2.2e-4 / 160); the limit point is the largest stress before it drops by 5 %. "
+        "Halving the step moves the x peak by 3e-4 N/mm². With such small steps the solver "
+        "often cannot follow the snap-back after the peak (the runs end with an error "
+        "there, which does not affect the peak).",
+        "",
+        "## Summary",
+        "",
+        "| where | the paper | ours | agrees |",
+        "|---|---|---|---|",
+    ]
+    for where, claim, ours, verdict in FINDINGS:
+        head.append(f"| {where} | {claim} | {ours} | **{verdict}** |")
+    head.append("")
+    with open(MD, "w") as f:
+        f.write("\n".join(head + body) + "\n")
+
+
+main()
