@@ -1137,8 +1137,17 @@ fn paper_contact_law_fails_cleanly_on_mixed_contact_with_sliding() {
     match inst.update(eps, &mut ws, TangentRequest::Consistent) {
         Err(Error::Solve {
             suggested_step_ratio,
+            reason,
             ..
-        }) => assert!(suggested_step_ratio > 0.0 && suggested_step_ratio < 1.0),
+        }) => {
+            assert!(suggested_step_ratio > 0.0 && suggested_step_ratio < 1.0);
+            // The message names the cause and the remedy.
+            assert!(
+                reason.contains("ITZ points are closed")
+                    && reason.contains("contact_shear = \"cohesive\""),
+                "{reason}"
+            );
+        }
         Err(e) => panic!("unexpected error: {e}"),
         Ok(r) => panic!(
             "the paper's law now converges here ({} iterations): update the docs of \

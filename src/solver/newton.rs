@@ -58,6 +58,7 @@ use crate::assembly::Discretization;
 use crate::element::TangentKind;
 use crate::error::{Error, Result};
 use crate::homogenization::Homogenizer;
+use crate::interface::ContactShear;
 use crate::scene::SolverSpec;
 use crate::state::{State, Workspace};
 
@@ -531,13 +532,18 @@ pub fn solve_increment(
             }
             Err(failure) => {
                 report.iterations += ws.residuals.len().saturating_sub(1) as u32;
+                let hint = if depth + 1 > settings.max_substep_depth {
+                    contact_law_hint(disc, &target, trial, ws)
+                } else {
+                    String::new()
+                };
                 trial.copy_from(&ws.substep_start);
                 depth += 1;
                 successes_in_row = 0;
                 if depth > settings.max_substep_depth {
                     let suggested = done.max(step).clamp(0.1, 0.5);
                     return Err(Error::Solve {
-                        reason: failure.describe(settings.max_iterations),
+                        reason: failure.describe(settings.max_iterations) + &hint,
                         depth: depth - 1,
                         suggested_step_ratio: suggested,
                     });
@@ -570,6 +576,42 @@ pub fn solve_increment(
     report.lu_factorizations = (ws.factor.lu_count - lu_before) as u32;
     report.lblt_factorizations = (ws.factor.lblt_count - lblt_before) as u32;
     Ok(report)
+}
+
+/// On a final failure: if the last iterate has closed ITZ points under the paper's contact
+/// law, say so and name the remedy. That law's shear traction jumps at closure (eq. 47
+/// against eqs. 32-35), and closed points that slide can leave the discrete RVE without an
+/// equilibrium (see `ContactShear`); no step size or solver setting helps then.
+fn contact_law_hint(
+    disc: &Discretization,
+    target: &[f64; 3],
+    trial: &State,
+    ws: &mut Workspace,
+) -> String {
+    let paper_law = disc
+        .law
+        .is_some_and(|l| l.contact && l.contact_shear == ContactShear::Penalty);
+    if !paper_law || trial.unknowns.iter().any(|v| !v.is_finite()) {
+        return String::new();
+    }
+    let counts = disc.evaluate(
+        &trial.unknowns,
+        target,
+        &ws.hist_base,
+        &mut ws.hist_try,
+        &mut ws.r_try,
+        None,
+    );
+    if counts.contact == 0 {
+        return String::new();
+    }
+    format!(
+        "; {} ITZ points are closed at the last iterate: with the paper's contact law \
+         (materials.itz.contact_shear = \"penalty\") the shear traction jumps at closure and \
+         sliding closed points can leave the RVE without equilibrium; \
+         contact_shear = \"cohesive\" keeps it continuous",
+        counts.contact
+    )
 }
 
 /// `out = X d` for a sensitivity `X` (n x 3, column-major) and a strain `d`.
