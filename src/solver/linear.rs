@@ -316,11 +316,19 @@ mod tests {
         (symbolic, matrix.val().to_vec())
     }
 
-    /// Factorizes, solves `A x = A p` and returns the kind and the relative error of `x`.
-    fn solve_error(m: usize, shift: f64) -> (FactorKind, f64) {
+    /// A shifted Laplacian factorized by a solver with or without the LL^T analysis.
+    struct Factorized {
+        pattern: SymbolicSparseColMat<usize>,
+        values: Vec<f64>,
+        linear: LinearSolver,
+        numeric: NumericFactor,
+        stack: MemBuffer,
+        kind: FactorKind,
+    }
+
+    fn factorized(m: usize, shift: f64, spd_possible: bool) -> Factorized {
         let (pattern, values) = shifted_laplacian(m, shift);
-        let n = m * m;
-        let linear = LinearSolver::new(&pattern, true).unwrap();
+        let linear = LinearSolver::new(&pattern, spd_possible).unwrap();
         let mut numeric = linear.numeric();
         let mut stack = MemBuffer::new(linear.scratch(1));
         let kind = linear
@@ -332,13 +340,28 @@ mod tests {
                 MemStack::new(&mut stack),
             )
             .unwrap();
+        Factorized {
+            pattern,
+            values,
+            linear,
+            numeric,
+            stack,
+            kind,
+        }
+    }
+
+    /// Factorizes, solves `A x = A p` and returns the kind and the relative error of `x`.
+    fn solve_error(m: usize, shift: f64) -> (FactorKind, f64) {
+        let mut f = factorized(m, shift, true);
+        let n = m * m;
         let exact: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
-        let a = SparseColMatRef::new(pattern.as_ref(), &values);
+        let a = SparseColMatRef::new(f.pattern.as_ref(), &f.values);
         let mut x = vec![0.0; n];
         add_product(a, 1.0, &exact, &mut x);
-        linear.solve_in_place(&numeric, &mut x, 1, MemStack::new(&mut stack));
+        f.linear
+            .solve_in_place(&f.numeric, &mut x, 1, MemStack::new(&mut f.stack));
         let err: f64 = x.iter().zip(&exact).map(|(a, b)| (a - b) * (a - b)).sum();
-        (kind, err.sqrt() / norm(&exact))
+        (f.kind, err.sqrt() / norm(&exact))
     }
 
     #[test]
@@ -358,20 +381,8 @@ mod tests {
 
     #[test]
     fn without_cholesky_analysis_lu_is_used() {
-        let (pattern, values) = shifted_laplacian(10, 1.3);
-        let linear = LinearSolver::new(&pattern, false).unwrap();
-        let mut numeric = linear.numeric();
-        let mut stack = MemBuffer::new(linear.scratch(1));
-        let kind = linear
-            .factorize(
-                &pattern,
-                &values,
-                &mut numeric,
-                true,
-                MemStack::new(&mut stack),
-            )
-            .unwrap();
-        assert_eq!(kind, FactorKind::Lu);
-        assert_eq!((numeric.lu_count, numeric.lblt_count), (1, 0));
+        let f = factorized(10, 1.3, false);
+        assert_eq!(f.kind, FactorKind::Lu);
+        assert_eq!((f.numeric.lu_count, f.numeric.lblt_count), (1, 0));
     }
 }
