@@ -532,7 +532,9 @@ pub fn solve_increment(
             }
             Err(failure) => {
                 report.iterations += ws.residuals.len().saturating_sub(1) as u32;
-                let hint = if depth + 1 > settings.max_substep_depth {
+                // The last iterate of a lost path is an arc point at another strain: no hint.
+                let final_failure = depth + 1 > settings.max_substep_depth;
+                let hint = if final_failure && !matches!(failure, Failure::PathLost) {
                     contact_law_hint(disc, &target, trial, ws)
                 } else {
                     String::new()
