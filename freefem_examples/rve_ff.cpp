@@ -246,25 +246,17 @@ long rve_ff_revert(KN<double> *const &H) { return each<rve_revert, false>("rveRe
 long rve_ff_free(KN<double> *const &H) { return each<rve_free, true>("rveFree", H); }
 
 // ---- strings -------------------------------------------------------------------------
-class LastError : public E_F0mps {
+// A FreeFEM function of no argument returning the string Get() gives (copied).
+const char *last_error_text() { return g_last_error.c_str(); }
+template <const char *(*Get)()>
+class StringOf : public E_F0mps {
  public:
   typedef string *Result;
-  LastError(const basicAC_F0 &args) { args.SetNameParam(0, 0, 0); }
+  StringOf(const basicAC_F0 &args) { args.SetNameParam(0, 0, 0); }
   static ArrayOfaType typeargs() { return ArrayOfaType(); }
-  static E_F0 *f(const basicAC_F0 &a) { return new LastError(a); }
+  static E_F0 *f(const basicAC_F0 &a) { return new StringOf(a); }
   AnyType operator()(Stack s) const {
-    return SetAny<string *>(Add2StackOfPtr2Free(s, new string(g_last_error)));
-  }
-  operator aType() const { return atype<string *>(); }
-};
-class Version : public E_F0mps {
- public:
-  typedef string *Result;
-  Version(const basicAC_F0 &args) { args.SetNameParam(0, 0, 0); }
-  static ArrayOfaType typeargs() { return ArrayOfaType(); }
-  static E_F0 *f(const basicAC_F0 &a) { return new Version(a); }
-  AnyType operator()(Stack s) const {
-    return SetAny<string *>(Add2StackOfPtr2Free(s, new string(rve_version())));
+    return SetAny<string *>(Add2StackOfPtr2Free(s, new string(Get())));
   }
   operator aType() const { return atype<string *>(); }
 };
@@ -302,8 +294,8 @@ static void Load_Init() {
   Global.Add("rveCommit", "(", new OneOperator1_<long, KN<double> *>(rve_ff_commit));
   Global.Add("rveRevert", "(", new OneOperator1_<long, KN<double> *>(rve_ff_revert));
   Global.Add("rveFree", "(", new OneOperator1_<long, KN<double> *>(rve_ff_free));
-  Global.Add("rveLastError", "(", new OneOperatorCode<LastError>());
-  Global.Add("rveVersion", "(", new OneOperatorCode<Version>());
+  Global.Add("rveLastError", "(", new OneOperatorCode<StringOf<last_error_text>>());
+  Global.Add("rveVersion", "(", new OneOperatorCode<StringOf<rve_version>>());
   Global.Add("rveStatusMessage", "(", new OneOperatorCode<StatusMessage>());
 }
 
