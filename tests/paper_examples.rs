@@ -705,22 +705,29 @@ fn penalty_study() {
         assert!(dist[k + 1] < dist[k] / 3.0, "{dist:?}");
     }
 
-    // The paper's law: 1e4..1e6 go through, with compression stiffnesses still far apart;
-    // 1e7 fails after the tension peak.
-    let paper: Vec<Vec<Point>> = ["1e4", "1e5", "1e6"]
+    // The paper's law: 1e4 and 1e5 go through, with compression stiffnesses far apart;
+    // 1e6 and 1e7 fail after the tension peak. Which post-snap equilibrium the increment
+    // after the peak lands on depends on the converged states before it at the level of
+    // the Newton tolerance (several equilibria exist there), and from some of them the
+    // closed, sliding points leave no equilibrium for the next increment (see
+    // `ContactShear`). 1e6 went through before the tangent predictor moved those states
+    // within the tolerance; the cohesive contact shear above goes through for all.
+    let paper: Vec<Vec<Point>> = ["1e4", "1e5"]
         .iter()
         .map(|lp| run(CYCLE, &[("lambda_p = 1e5", &format!("lambda_p = {lp}"))]))
         .collect();
     let stiff: Vec<f64> = paper.iter().map(|c| c[59].tangent[0]).collect();
-    println!("paper's law, compression D11 for 1e4, 1e5, 1e6: {stiff:.0?}");
-    assert!(stiff[2] > 1.1 * stiff[1] && stiff[1] > 1.5 * stiff[0]);
-    let failed = follow(
-        &model(CYCLE, &[("lambda_p = 1e5", "lambda_p = 1e7")]),
-        &path_of(CYCLE),
-    );
-    let (k, why) = failed
-        .failure
-        .expect("lambda_p = 1e7 now goes through with the paper's law: update the docs");
-    println!("paper's law, lambda_p = 1e7: increment {k} fails: {why}");
-    assert!((19..=20).contains(&k), "fails at increment {k}");
+    println!("paper's law, compression D11 for 1e4, 1e5: {stiff:.0?}");
+    assert!(stiff[1] > 1.5 * stiff[0]);
+    for lp in ["1e6", "1e7"] {
+        let failed = follow(
+            &model(CYCLE, &[("lambda_p = 1e5", &format!("lambda_p = {lp}"))]),
+            &path_of(CYCLE),
+        );
+        let (k, why) = failed.failure.unwrap_or_else(|| {
+            panic!("lambda_p = {lp} now goes through with the paper's law: update the docs")
+        });
+        println!("paper's law, lambda_p = {lp}: increment {k} fails: {why}");
+        assert!((19..=20).contains(&k), "{lp} fails at increment {k}");
+    }
 }

@@ -210,7 +210,7 @@ impl Discretization {
         kind: TangentKind,
     ) -> SystemEvaluation {
         // Linear part: K_const x + G eps.
-        self.pattern.mul_vec(&self.k_const, x, r);
+        self.pattern.mul_symmetric(&self.k_const, x, r);
         let n = self.n();
         for (c, &e) in eps.iter().enumerate() {
             if e != 0.0 {

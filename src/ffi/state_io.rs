@@ -18,18 +18,19 @@
 //! | format | library | payload history |
 //! |---|---|---|
 //! | 1 | 0.1.0 | `[delta_max, t_max]` per point (read, `t_max` dropped) |
-//! | 2 | after 0.1.0 | `delta_max` per point (written) |
+//! | 2 | main after 0.1.0 | `delta_max` per point (read, no sensitivity: the next increment starts from the elastic predictor) |
+//! | 3 | after 0.2.0 | format 2 plus the predictor's sensitivity ([`crate::state::Sensitivity`]) (written) |
 
 use super::boundary::{Failure, FfiResult};
 use super::status::RveStatus;
 use crate::model::Model;
-use crate::state::{State, StateFormat1};
+use crate::state::{State, StateFormat1, StateFormat2};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 2;
+pub const STATE_FORMAT_VERSION: u32 = 3;
 /// Older formats this library still reads.
-const READABLE_OLD_FORMATS: [u32; 1] = [1];
+const READABLE_OLD_FORMATS: [u32; 2] = [1, 2];
 const HEADER: usize = 40;
 
 fn sizes(model: &Model) -> (u64, u64) {
@@ -108,16 +109,24 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
         bincode::deserialize::<StateFormat1>(payload)
             .map_err(|e| bad(&e.to_string()))?
             .into()
+    } else if version == 2 {
+        bincode::deserialize::<StateFormat2>(payload)
+            .map_err(|e| bad(&e.to_string()))?
+            .into()
     } else {
         bincode::deserialize(payload).map_err(|e| bad(&e.to_string()))?
     };
-    if state.unknowns.len() as u64 != n || state.history.len() as u64 != nh {
+    if state.unknowns.len() as u64 != n
+        || state.history.len() as u64 != nh
+        || state.sensitivity.values.len() as u64 != 3 * n
+    {
         return Err(bad("payload sizes disagree with the header"));
     }
     if state
         .strain
         .iter()
         .chain(&state.unknowns)
+        .chain(&state.sensitivity.scale)
         .any(|v| !v.is_finite())
     {
         return Err(bad("non-finite values"));

@@ -83,13 +83,24 @@ impl Homogenizer {
     /// `D_hom = D_Taylor - (1/V) G^T X` with `X = K^-1 G` (n x 3, column-major), row-major.
     pub fn tangent(&self, disc: &Discretization, kg: &[f64]) -> [f64; 9] {
         let n = disc.n();
-        let mut out = [0.0; 9];
+        let mut condensed = [0.0; 9];
         for i in 0..3 {
             let g = &disc.g[i * n..(i + 1) * n];
             for j in 0..3 {
                 let x = &kg[j * n..(j + 1) * n];
-                let gkx: f64 = g.iter().zip(x).map(|(a, b)| a * b).sum();
-                out[3 * i + j] = self.d_taylor[(i, j)] - gkx / self.volume;
+                condensed[3 * i + j] = g.iter().zip(x).map(|(a, b)| a * b).sum();
+            }
+        }
+        self.tangent_from_condensed(&condensed)
+    }
+
+    /// `D_hom = D_Taylor - (1/V) C` (eq. 18) from the condensed term `C = G^T K^-1 G`
+    /// (3 x 3, row-major).
+    pub fn tangent_from_condensed(&self, condensed: &[f64; 9]) -> [f64; 9] {
+        let mut out = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                out[3 * i + j] = self.d_taylor[(i, j)] - condensed[3 * i + j] / self.volume;
             }
         }
         out

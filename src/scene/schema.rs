@@ -338,6 +338,12 @@ pub struct SolverSpec {
     /// Newton fails on a step, before the step is bisected; 0 switches it off.
     #[serde(default = "default_secant_iterations")]
     pub max_secant_iterations: u32,
+    /// Modified-Newton (chord) corrections: after a Newton correction that cut the
+    /// residual at least a hundredfold, the next correction reuses its factorization
+    /// instead of factorizing the new tangent (see `solver::newton`). `false` gives
+    /// plain Newton with its quadratic rate.
+    #[serde(default = "yes")]
+    pub reuse_factorization: bool,
 }
 
 impl Default for SolverSpec {
@@ -349,6 +355,7 @@ impl Default for SolverSpec {
             max_substep_depth: default_substep_depth(),
             path_following: true,
             max_secant_iterations: default_secant_iterations(),
+            reuse_factorization: true,
         }
     }
 }

@@ -16,6 +16,77 @@ pub struct State {
     /// see [`CohesiveHistory`]).
     #[serde(with = "history_serde")]
     pub history: Vec<CohesiveHistory>,
+    /// Fluctuation sensitivity `X = dx/d eps = -K^-1 G` at this state, kept to predict
+    /// the next increment (see [`Sensitivity`]).
+    pub sensitivity: Sensitivity,
+}
+
+/// The sensitivity `X = -K^-1 G` (n x 3, column-major) of a converged state, stored in
+/// 16-bit fixed point: column `c` holds `round(32767 X_ic / scale_c)` with
+/// `scale_c = max_i |X_ic|`. It only seeds the next increment's Newton loop
+/// (`x_0 = x_n + X_n Delta eps`, a first-order predictor), where a relative error of
+/// 1.5e-5 of the column maximum is far below the predictor's own `O(Delta eps^2)` error,
+/// and it costs 6 bytes per unknown instead of 24. `valid` is false until a converged
+/// update with a tangent has filled it (the virgin state uses the model's elastic one).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sensitivity {
+    pub valid: bool,
+    pub scale: [f64; 3],
+    pub values: Vec<i16>,
+}
+
+impl Sensitivity {
+    fn empty(n_unknowns: usize) -> Self {
+        Sensitivity {
+            valid: false,
+            scale: [0.0; 3],
+            values: vec![0; 3 * n_unknowns],
+        }
+    }
+
+    /// Stores `-kg` (`kg = K^-1 G`, n x 3 column-major) without reallocating.
+    pub fn store_negated(&mut self, kg: &[f64]) {
+        let n = self.values.len() / 3;
+        if kg.len() != 3 * n || kg.iter().any(|v| !v.is_finite()) {
+            self.valid = false;
+            return;
+        }
+        for c in 0..3 {
+            let col = &kg[c * n..(c + 1) * n];
+            let scale = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            self.scale[c] = scale;
+            let factor = if scale > 0.0 { 32767.0 / scale } else { 0.0 };
+            for (q, v) in self.values[c * n..(c + 1) * n].iter_mut().zip(col) {
+                *q = (-v * factor).round() as i16;
+            }
+        }
+        self.valid = true;
+    }
+
+    /// `out = X d` (nothing if not valid; returns whether it wrote).
+    pub fn times(&self, d: &[f64; 3], out: &mut [f64]) -> bool {
+        let n = out.len();
+        if !self.valid || self.values.len() != 3 * n {
+            return false;
+        }
+        let w = [
+            d[0] * self.scale[0] / 32767.0,
+            d[1] * self.scale[1] / 32767.0,
+            d[2] * self.scale[2] / 32767.0,
+        ];
+        let (x0, rest) = self.values.split_at(n);
+        let (x1, x2) = rest.split_at(n);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = f64::from(x0[i]) * w[0] + f64::from(x1[i]) * w[1] + f64::from(x2[i]) * w[2];
+        }
+        true
+    }
+
+    fn copy_from(&mut self, other: &Sensitivity) {
+        self.valid = other.valid;
+        self.scale = other.scale;
+        self.values.copy_from_slice(&other.values);
+    }
 }
 
 impl State {
@@ -25,6 +96,7 @@ impl State {
             strain: [0.0; 3],
             unknowns: vec![0.0; n_unknowns],
             history: vec![CohesiveHistory::default(); n_history],
+            sensitivity: Sensitivity::empty(n_unknowns),
         }
     }
 
@@ -33,6 +105,7 @@ impl State {
         self.strain = other.strain;
         self.unknowns.copy_from_slice(&other.unknowns);
         self.history.copy_from_slice(&other.history);
+        self.sensitivity.copy_from(&other.sensitivity);
     }
 
     /// Heap and inline bytes of this state.
@@ -40,6 +113,7 @@ impl State {
         std::mem::size_of::<Self>()
             + self.unknowns.capacity() * std::mem::size_of::<f64>()
             + self.history.capacity() * std::mem::size_of::<CohesiveHistory>()
+            + self.sensitivity.values.capacity() * std::mem::size_of::<i16>()
     }
 }
 
@@ -77,12 +151,34 @@ impl From<StateFormat1> for State {
     fn from(old: StateFormat1) -> Self {
         State {
             strain: old.strain,
+            sensitivity: Sensitivity::empty(old.unknowns.len()),
             unknowns: old.unknowns,
             history: old
                 .history
                 .into_iter()
                 .map(|[delta_max, _t_max]| CohesiveHistory { delta_max })
                 .collect(),
+        }
+    }
+}
+
+/// The state as format 2 of the state bytes stored it: no sensitivity (the next increment
+/// after loading starts from the elastic predictor).
+#[derive(Deserialize)]
+pub struct StateFormat2 {
+    pub strain: [f64; 3],
+    pub unknowns: Vec<f64>,
+    #[serde(with = "history_serde")]
+    pub history: Vec<CohesiveHistory>,
+}
+
+impl From<StateFormat2> for State {
+    fn from(old: StateFormat2) -> Self {
+        State {
+            strain: old.strain,
+            sensitivity: Sensitivity::empty(old.unknowns.len()),
+            unknowns: old.unknowns,
+            history: old.history,
         }
     }
 }

@@ -3,5 +3,5 @@
 mod instance_state;
 mod workspace;
 
-pub use instance_state::{State, StateFormat1};
+pub use instance_state::{Sensitivity, State, StateFormat1, StateFormat2};
 pub use workspace::Workspace;

@@ -27,6 +27,8 @@ pub struct Workspace {
     /// `K^-1 G` (n x 3, column-major) and its refinement residual.
     pub kg: Vec<f64>,
     pub kg_res: Vec<f64>,
+    /// Refinement correction of `kg`.
+    pub delta: Vec<f64>,
     /// Interface histories: start of the sub-step, trial, line-search trial.
     pub hist_base: Vec<CohesiveHistory>,
     pub hist_trial: Vec<CohesiveHistory>,
@@ -70,6 +72,7 @@ impl Workspace {
             k_try: vec![0.0; nnz],
             kg: vec![0.0; 3 * n],
             kg_res: vec![0.0; 3 * n],
+            delta: vec![0.0; 3 * n],
             hist_base: vec![CohesiveHistory::default(); nh],
             hist_trial: vec![CohesiveHistory::default(); nh],
             hist_try: vec![CohesiveHistory::default(); nh],
