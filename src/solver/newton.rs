@@ -35,18 +35,37 @@
 //! with a suggested step ratio (UMAT's PNEWDT), and the committed state is untouched
 //! because every iterate lives in the trial state.
 //!
+//! # Predictor
+//! Each step starts from `x_n + X_n Delta eps`, with `X_n = -K_n^-1 G` the sensitivity of
+//! the committed state, kept in the state from its tangent computation (16-bit, see
+//! [`crate::state::Sensitivity`]): Newton's own first iterate, whose residual is
+//! `O(|Delta eps|^2)` (3e-3 relative on the paper RVE's pre-peak increments, against
+//! 3e-2 from the elastic sensitivity of the virgin RVE). It is kept only if it lowers the
+//! residual and leaves every ITZ point before the envelope's peak; otherwise the elastic
+//! predictor is tried (see [`predict`]), and if Newton fails from the tangent prediction
+//! the step restarts from the elastic one before any other remedy.
+//!
+//! # Chord corrections
+//! A Newton correction that cuts the residual at least a hundredfold
+//! ([`CHORD_CONTRACTION`]) shows that the tangent barely changed over the step; the next
+//! correction then reuses the factorization (a chord or modified-Newton step, contracting
+//! by the relative change of the tangent, about 1e-2 here) instead of factorizing the new
+//! tangent. With the tangent predictor, a pre-peak increment takes one factorization, one
+//! Newton and one chord correction. `solver.reuse_factorization = false` gives plain
+//! Newton and its quadratic rate (`tests/newton_convergence.rs` checks both).
+//!
 //! # Tangent
 //! `D_hom = D_Taylor - (1/V) G^T K^-1 G` at the converged state (eq. 18), with `K` the
-//! consistent tangent there, by condensation with the factorization the Newton loop left:
+//! consistent tangent there, by condensation with the factorization the Newton loop left
+//! (see [`condensed_tangent`]):
 //! - if the converged `K` is bitwise the last factorized one (unloading, contact, the
 //!   elastic range: piecewise linear branches), `K^-1 G` costs three solves;
-//! - if the last Newton step was small (`||dx|| < 1e-5 ||x||`, typical after many
-//!   iterations), `K^-1 G` from the last factorization (`K` at the previous iterate) is
-//!   corrected by iterative refinement against the converged `K` until `D_hom` changes by
-//!   less than 1e-13 relative;
-//! - otherwise (typically a two-iteration increment before the peak, where refinement
-//!   would need more sweeps than a factorization costs), or when refinement stalls, the
-//!   converged `K` is factorized once more. `IncrementReport::factorizations` counts it.
+//! - otherwise `K_f^-1 G` from the last factorization `K_f` is refined against the
+//!   converged `K`, and `G^T K^-1 G` is taken from its variational form, whose error is
+//!   quadratic in that of `K^-1 G`: one or two sweeps reach 1e-10 after a chord step;
+//! - only when [`TANGENT_SWEEPS`] sweeps cannot reach [`TANGENT_ACCURACY`] (a long last
+//!   step, after the peak) is the converged `K` factorized once more.
+//!   `IncrementReport::factorizations` counts it.
 //!
 //! With sub-steps, the tangent is that of the last sub-step.
 
@@ -138,16 +157,16 @@ fn reference(disc: &Discretization, eps: &[f64; 3]) -> f64 {
     sq.sqrt().max(1e-8 * g_frob)
 }
 
-/// Evaluates `R` and `K` at `x` into `ws.r`, `ws.k` and `ws.hist_trial`, from the
-/// sub-step's history `ws.hist_base`.
+/// Evaluates `R` and `K` at `x` into `ws.r`, `ws.k`, `ws.hist_trial` and `ws.counts`,
+/// from the sub-step's history `ws.hist_base`.
 pub(super) fn evaluate_current(
     disc: &Discretization,
     x: &[f64],
     eps: &[f64; 3],
     kind: TangentKind,
     ws: &mut Workspace,
-) -> crate::assembly::SystemEvaluation {
-    disc.evaluate_with(
+) {
+    ws.counts = disc.evaluate_with(
         x,
         eps,
         &ws.hist_base,
@@ -155,7 +174,15 @@ pub(super) fn evaluate_current(
         &mut ws.r,
         Some(&mut ws.k),
         kind,
-    )
+    );
+}
+
+/// Takes the evaluation in the `*_try` buffers as the current one.
+fn accept_try(ws: &mut Workspace) {
+    std::mem::swap(&mut ws.r, &mut ws.r_try);
+    std::mem::swap(&mut ws.k, &mut ws.k_try);
+    std::mem::swap(&mut ws.hist_trial, &mut ws.hist_try);
+    std::mem::swap(&mut ws.counts, &mut ws.counts_try);
 }
 
 /// Factorizes `ws.k` into `ws.factor`.
@@ -192,7 +219,7 @@ const CHORD_CONTRACTION: f64 = 1e-2;
 /// Refinement sweeps the condensed tangent may take before a fresh factorization is
 /// cheaper: one sweep (a 3-column solve and three products) costs 0.11 ms against 0.43 ms
 /// for a factorization and its 3-column solve on the paper RVE, 2.1 ms against 11.2 ms on
-/// the fine one (`examples`-free measurement in `benches/solver.rs`' table).
+/// the fine one (timed with the factorization and solve of `benches/solver.rs`).
 const TANGENT_SWEEPS: u32 = 3;
 /// Relative accuracy of the condensed term `G^T K^-1 G` the sweeps must reach. The stress
 /// it goes with is converged to the Newton tolerance (1e-6 relative residual by default);
@@ -204,9 +231,11 @@ const TANGENT_ACCURACY: f64 = 1e-10;
 const SECANT_HANDOVER: f64 = 100.0;
 
 /// One Newton loop at fixed macro strain `eps` from the unknowns `x`, with interface
-/// history `ws.hist_base`. On success `x` is converged, `ws.r`/`ws.k`/`ws.hist_trial`
-/// belong to it (`ws.k` is the consistent tangent), and `ws.factor` holds the last
-/// factorization (if any).
+/// history `ws.hist_base`. `evaluated`: `ws.r`/`ws.k`/`ws.hist_trial` already hold the
+/// consistent evaluation at `x` (from the predictor). On success `x` is converged,
+/// `ws.r`/`ws.k`/`ws.hist_trial`/`ws.counts` belong to it (`ws.k` is the consistent
+/// tangent), and `ws.factor` holds the last factorization (if any).
+#[allow(clippy::too_many_arguments)]
 fn newton(
     disc: &Discretization,
     linear: &LinearSolver,
@@ -215,6 +244,7 @@ fn newton(
     x: &mut [f64],
     ws: &mut Workspace,
     mode: Mode,
+    evaluated: bool,
 ) -> std::result::Result<(u32, u32), Failure> {
     let reference = reference(disc, eps);
     let tolerance = settings.tolerance * reference;
@@ -227,8 +257,11 @@ fn newton(
         Mode::SecantThenNewton => TangentKind::Secant,
     };
     ws.factored = false;
+    ws.kg_of_factor = false;
     ws.residuals.clear();
-    evaluate_current(disc, x, eps, kind, ws);
+    if !(evaluated && kind == TangentKind::Consistent) {
+        evaluate_current(disc, x, eps, kind, ws);
+    }
     let mut rnorm = norm(&ws.r);
     let mut factorizations = 0;
     let mut iteration = 0u32;
@@ -254,14 +287,33 @@ fn newton(
                 reference,
             });
         }
-        if !(chord && ws.factored) {
+        let fresh = !(chord && ws.factored);
+        if fresh {
             factorize_current(disc, linear, ws).map_err(Failure::Singular)?;
             factorizations += 1;
             ws.k_factored.copy_from_slice(&ws.k);
             ws.factored = kind == TangentKind::Consistent;
+            ws.kg_of_factor = false;
         }
-        ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
-        linear.solve_in_place(&ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
+        if fresh && ws.factored {
+            // The correction and K_f^-1 G for the tangent in one 4-column solve (fine RVE:
+            // 2.0 ms, against 1.1 ms for the correction alone and 1.8 ms for the three
+            // tangent columns; paper RVE: 0.11, 0.04 and 0.08 ms): if the increment ends on
+            // this factorization (a chord step follows), the tangent starts from it (see
+            // `condensed_tangent`). Done whether or not the tangent is wanted, so that the
+            // correction, and with it the stress, has the same bits either way.
+            let n = disc.n();
+            let (first, rest) = ws.rhs4.split_at_mut(n);
+            first.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
+            rest.copy_from_slice(&disc.g);
+            linear.solve_in_place(&ws.factor, &mut ws.rhs4, 4, MemStack::new(&mut ws.stack));
+            ws.dx.copy_from_slice(&ws.rhs4[..n]);
+            ws.kg.copy_from_slice(&ws.rhs4[n..]);
+            ws.kg_of_factor = true;
+        } else {
+            ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
+            linear.solve_in_place(&ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
+        }
         if ws.dx.iter().any(|d| !d.is_finite()) {
             return Err(Failure::Singular("non-finite Newton correction".into()));
         }
@@ -279,9 +331,7 @@ fn newton(
             norm(&ws.r_try)
         };
         x.copy_from_slice(&ws.x_try);
-        std::mem::swap(&mut ws.r, &mut ws.r_try);
-        std::mem::swap(&mut ws.k, &mut ws.k_try);
-        std::mem::swap(&mut ws.hist_trial, &mut ws.hist_try);
+        accept_try(ws);
         if mode == Mode::SecantThenNewton {
             let wanted = if new_norm <= SECANT_HANDOVER * tolerance {
                 TangentKind::Consistent
@@ -348,7 +398,7 @@ fn try_step(
     for ((t, xi), di) in ws.x_try.iter_mut().zip(x).zip(&ws.dx) {
         *t = xi + alpha * di;
     }
-    disc.evaluate_with(
+    ws.counts_try = disc.evaluate_with(
         &ws.x_try,
         eps,
         &ws.hist_base,
@@ -366,10 +416,9 @@ pub struct Problem<'a> {
     pub hom: &'a Homogenizer,
     pub linear: &'a LinearSolver,
     pub settings: &'a SolverSpec,
-    /// Elastic sensitivity `-K_el^-1 G` (n x 3, column-major), or empty: the predictor
-    /// `x_0 = x_n + X_el Delta eps` of each step, taken when it lowers the residual. Before
-    /// the peak it is close to the Newton predictor `x_n + X_n Delta eps` and saves its
-    /// factorization.
+    /// Elastic sensitivity `-K_el^-1 G` (n x 3, column-major), or empty: the fallback
+    /// predictor `x_0 = x_n + X_el Delta eps` of a step when the committed state has no
+    /// sensitivity of its own or its prediction is refused (see [`predict`]).
     pub predictor: &'a [f64],
 }
 
@@ -381,7 +430,9 @@ pub struct Problem<'a> {
 /// predicted when the step goes towards the origin (unloading: the secant response is
 /// linear and plain Newton from `x` is exact in one iteration). `ws.hist_base` must hold
 /// the step's start history. `sensitivity` is `None` to skip the tangent predictor.
-/// Returns whether the tangent predictor was taken.
+/// Returns whether a prediction was taken (its consistent evaluation is then in
+/// `ws.r`/`ws.k`/`ws.hist_trial`, for Newton to start from) and whether it was the
+/// tangent one.
 fn predict(
     problem: &Problem,
     sensitivity: Option<&Sensitivity>,
@@ -390,11 +441,11 @@ fn predict(
     step: &[f64; 3],
     target: &[f64; 3],
     ws: &mut Workspace,
-) -> bool {
+) -> (bool, bool) {
     let (disc, n) = (problem.disc, problem.disc.n());
     let outward = from[0] * step[0] + from[1] * step[1] + from[2] * step[2] >= 0.0;
     if !outward {
-        return false;
+        return (false, false);
     }
     sensitivity_times(&disc.g, step, &mut ws.r_try);
     let before = norm(&ws.r_try);
@@ -415,13 +466,13 @@ fn predict(
             .iter_mut()
             .zip(x.iter())
             .for_each(|(t, xi)| *t += xi);
-        disc.evaluate(
+        ws.counts_try = disc.evaluate(
             &ws.x_try,
             target,
             &ws.hist_base,
             &mut ws.hist_try,
             &mut ws.r_try,
-            None,
+            Some(&mut ws.k_try),
         );
         // The tangent prediction is kept only if every ITZ point stays before the peak
         // of the envelope (delta < delta_c): a step into softening can pass a limit point
@@ -435,10 +486,11 @@ fn predict(
                 .is_some_and(|law| ws.hist_try.iter().any(|h| h.delta_max >= law.delta_c));
         if !softening && norm(&ws.r_try) < before {
             x.copy_from_slice(&ws.x_try);
-            return which == 0;
+            accept_try(ws);
+            return (true, which == 0);
         }
     }
-    false
+    (false, false)
 }
 
 /// Solves the RVE from the committed state to macro strain `eps`, writing the converged
@@ -503,7 +555,7 @@ pub fn solve_increment(
             target[2] - trial.strain[2],
         ];
         let from = trial.strain;
-        let tangent_predicted = predict(
+        let (evaluated, tangent_predicted) = predict(
             problem,
             Some(&committed.sensitivity),
             &mut trial.unknowns,
@@ -521,13 +573,14 @@ pub fn solve_increment(
             &mut trial.unknowns,
             ws,
             Mode::Newton,
+            evaluated,
         );
         // 1b. Near a limit point the tangent predictor can overshoot into the basin of
         // another equilibrium; Newton then starts again from the elastic predictor.
         if outcome.is_err() && tangent_predicted {
             report.iterations += ws.residuals.len().saturating_sub(1) as u32;
             trial.copy_from(&ws.substep_start);
-            predict(
+            let (evaluated, _) = predict(
                 problem,
                 None,
                 &mut trial.unknowns,
@@ -544,6 +597,7 @@ pub fn solve_increment(
                 &mut trial.unknowns,
                 ws,
                 Mode::Newton,
+                evaluated,
             );
         }
         // 2. Path following through a limit point, then Newton from the last arc point.
@@ -566,6 +620,7 @@ pub fn solve_increment(
                     &mut trial.unknowns,
                     ws,
                     Mode::Newton,
+                    false,
                 );
             } else {
                 outcome = Err(Failure::PathLost);
@@ -584,6 +639,7 @@ pub fn solve_increment(
                 &mut trial.unknowns,
                 ws,
                 Mode::SecantThenNewton,
+                false,
             );
         }
         match outcome {
@@ -625,14 +681,8 @@ pub fn solve_increment(
             }
         }
     }
-    let counts = disc.evaluate(
-        &trial.unknowns,
-        &eps,
-        &ws.hist_base,
-        &mut ws.hist_try,
-        &mut ws.r_try,
-        None,
-    );
+    // The branch counts of the last evaluation, at the converged point.
+    let counts = ws.counts;
     report.loading = counts.loading;
     report.unloading = counts.unloading;
     report.contact = counts.contact;
@@ -747,8 +797,10 @@ fn condensed_tangent(
     };
     let unchanged = ws.factored && ws.k == ws.k_factored;
     if ws.factored {
-        ws.kg.copy_from_slice(&disc.g);
-        linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
+        if !ws.kg_of_factor {
+            ws.kg.copy_from_slice(&disc.g);
+            linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
+        }
         if unchanged {
             return Ok((condensed(&ws.kg, None), 0));
         }

@@ -4,7 +4,7 @@
 use faer::dyn_stack::MemBuffer;
 
 use super::State;
-use crate::assembly::Discretization;
+use crate::assembly::{Discretization, SystemEvaluation};
 use crate::interface::CohesiveHistory;
 use crate::solver::{LinearSolver, NumericFactor};
 
@@ -26,6 +26,11 @@ pub struct Workspace {
     pub k_try: Vec<f64>,
     /// `K^-1 G` (n x 3, column-major) and its refinement residual.
     pub kg: Vec<f64>,
+    /// True when `kg` is `K_f^-1 G` for the factorization in `factor`, solved with the
+    /// Newton correction (see `solver::newton`).
+    pub kg_of_factor: bool,
+    /// Right-hand sides of a Newton correction with the tangent columns: `[-R | G]`.
+    pub rhs4: Vec<f64>,
     pub kg_res: Vec<f64>,
     /// Refinement correction of `kg`.
     pub delta: Vec<f64>,
@@ -41,6 +46,9 @@ pub struct Workspace {
     pub arc_xa: Vec<f64>,
     pub arc_prev: Vec<f64>,
     pub arc_pred: Vec<f64>,
+    /// Branch counts of the evaluation in `r`/`k` and of the one in the `*_try` buffers.
+    pub counts: SystemEvaluation,
+    pub counts_try: SystemEvaluation,
     /// Residual norms of the last Newton loop (for convergence studies).
     pub residuals: Vec<f64>,
     /// Which model this workspace was sized for.
@@ -58,7 +66,7 @@ impl Workspace {
         let n = disc.n();
         let nh = disc.history_len();
         let nnz = disc.pattern.nnz();
-        let req = linear.scratch(3);
+        let req = linear.scratch(4);
         Workspace {
             k: vec![0.0; nnz],
             k_factored: vec![0.0; nnz],
@@ -71,6 +79,8 @@ impl Workspace {
             r_try: vec![0.0; n],
             k_try: vec![0.0; nnz],
             kg: vec![0.0; 3 * n],
+            kg_of_factor: false,
+            rhs4: vec![0.0; 4 * n],
             kg_res: vec![0.0; 3 * n],
             delta: vec![0.0; 3 * n],
             hist_base: vec![CohesiveHistory::default(); nh],
@@ -82,6 +92,8 @@ impl Workspace {
             arc_xa: vec![0.0; n],
             arc_prev: vec![0.0; n],
             arc_pred: vec![0.0; n],
+            counts: SystemEvaluation::default(),
+            counts_try: SystemEvaluation::default(),
             residuals: Vec::with_capacity(max_iterations + 2),
             model_id,
         }
