@@ -536,7 +536,17 @@ pub fn solve_increment(
     let delta = [eps[0] - start[0], eps[1] - start[1], eps[2] - start[2]];
     let (mut done, mut step) = (0.0f64, 1.0f64);
     let (mut depth, mut successes_in_row) = (0u32, 0u32);
+    // The speed-ups (tangent predictor, chord corrections) serve the easy increments. Once
+    // plain Newton has failed on a step, the rest of the increment runs without them:
+    // plain Newton, as the remedies below were designed and measured with, and no
+    // committed-state sensitivity applied to sub-steps that start elsewhere.
+    let plain_settings = SolverSpec {
+        reuse_factorization: false,
+        ..*settings
+    };
+    let mut hard = false;
     while done < 1.0 {
+        let settings = if hard { &plain_settings } else { settings };
         let to = (done + step).min(1.0);
         let target = if to >= 1.0 {
             eps
@@ -557,7 +567,7 @@ pub fn solve_increment(
         let from = trial.strain;
         let (evaluated, tangent_predicted) = predict(
             problem,
-            Some(&committed.sensitivity),
+            (!hard).then_some(&committed.sensitivity),
             &mut trial.unknowns,
             &from,
             &step_strain,
@@ -576,8 +586,12 @@ pub fn solve_increment(
             evaluated,
         );
         // 1b. Near a limit point the tangent predictor can overshoot into the basin of
-        // another equilibrium; Newton then starts again from the elastic predictor.
-        if outcome.is_err() && tangent_predicted {
+        // another equilibrium, and chord corrections can stall; plain Newton then starts
+        // again from the elastic predictor.
+        let retry = outcome.is_err() && (tangent_predicted || settings.reuse_factorization);
+        hard |= outcome.is_err();
+        let settings = if hard { &plain_settings } else { settings };
+        if retry {
             report.iterations += ws.residuals.len().saturating_sub(1) as u32;
             trial.copy_from(&ws.substep_start);
             let (evaluated, _) = predict(
