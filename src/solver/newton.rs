@@ -43,7 +43,11 @@
 //! 3e-2 from the elastic sensitivity of the virgin RVE). It is kept only if it lowers the
 //! residual and leaves every ITZ point before the envelope's peak; otherwise the elastic
 //! predictor is tried (see [`predict`]), and if Newton fails from the tangent prediction
-//! the step restarts from the elastic one before any other remedy.
+//! the step restarts from the elastic one before any other remedy. Once Newton has failed
+//! on a step, the rest of the increment runs plain Newton from elastic predictions (no
+//! chord corrections, no committed sensitivity applied to sub-steps that start elsewhere):
+//! the speed-ups serve the easy steps, the remedies keep the behaviour they were measured
+//! with.
 //!
 //! # Chord corrections
 //! A Newton correction that cuts the residual at least a hundredfold
@@ -418,7 +422,7 @@ pub struct Problem<'a> {
     pub settings: &'a SolverSpec,
     /// Elastic sensitivity `-K_el^-1 G` (n x 3, column-major), or empty: the fallback
     /// predictor `x_0 = x_n + X_el Delta eps` of a step when the committed state has no
-    /// sensitivity of its own or its prediction is refused (see [`predict`]).
+    /// sensitivity of its own or its prediction is refused (see the module docs).
     pub predictor: &'a [f64],
 }
 
