@@ -182,3 +182,38 @@ impl From<StateFormat2> for State {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 16-bit sensitivity reproduces `X d` to 1.5e-5 of each column's largest entry
+    /// (half a quantization step), and refuses non-finite input.
+    #[test]
+    fn sensitivity_round_trip_and_refusal() {
+        let n = 50;
+        let kg: Vec<f64> = (0..3 * n)
+            .map(|i| ((i * 7919) % 101) as f64 * 1e-3 - 0.05 * (i / n) as f64)
+            .collect();
+        let mut s = State::virgin(n, 0).sensitivity;
+        assert!(!s.valid);
+        let mut out = vec![0.0; n];
+        assert!(!s.times(&[1.0, 0.0, 0.0], &mut out));
+        s.store_negated(&kg);
+        assert!(s.valid);
+        for c in 0..3 {
+            let mut d = [0.0; 3];
+            d[c] = 1.0;
+            assert!(s.times(&d, &mut out));
+            let col = &kg[c * n..(c + 1) * n];
+            let max = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (o, v) in out.iter().zip(col) {
+                assert!((o + v).abs() <= 0.5 / 32767.0 * max * (1.0 + 1e-12));
+            }
+        }
+        let mut bad = kg.clone();
+        bad[3] = f64::NAN;
+        s.store_negated(&bad);
+        assert!(!s.valid);
+    }
+}
