@@ -27,7 +27,9 @@ pub struct State {
 /// (`x_0 = x_n + X_n Delta eps`, a first-order predictor), where a relative error of
 /// 1.5e-5 of the column maximum is far below the predictor's own `O(Delta eps^2)` error,
 /// and it costs 6 bytes per unknown instead of 24. `valid` is false until a converged
-/// update with a tangent has filled it (the virgin state uses the model's elastic one).
+/// update with a tangent has filled it (the virgin state uses the model's elastic one); an
+/// update without tangent keeps the one of the state it started from, which the
+/// predictor's residual check then guards like any other prediction.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Sensitivity {
     pub valid: bool,
