@@ -189,12 +189,13 @@ fn accept_try(ws: &mut Workspace) {
     std::mem::swap(&mut ws.counts, &mut ws.counts_try);
 }
 
-/// Factorizes `ws.k` into `ws.factor`.
+/// Factorizes `ws.k` into `ws.factor` (`ws.kg` no longer belongs to it).
 pub(super) fn factorize_current(
     disc: &Discretization,
     linear: &LinearSolver,
     ws: &mut Workspace,
 ) -> std::result::Result<super::FactorKind, String> {
+    ws.kg_of_factor = false;
     linear.factorize(
         &disc.pattern.symbolic,
         &ws.k,
@@ -297,7 +298,6 @@ fn newton(
             factorizations += 1;
             ws.k_factored.copy_from_slice(&ws.k);
             ws.factored = kind == TangentKind::Consistent;
-            ws.kg_of_factor = false;
         }
         if fresh && ws.factored {
             // The correction and K_f^-1 G for the tangent in one 4-column solve (fine RVE:
