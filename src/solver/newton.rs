@@ -457,48 +457,59 @@ fn predict(
     }
     sensitivity_times(&disc.g, step, &mut ws.r_try);
     let before = norm(&ws.r_try);
-    let candidates = [
-        sensitivity.is_some_and(|s| s.valid),
-        problem.predictor.len() == 3 * n,
-    ];
-    for (which, &available) in candidates.iter().enumerate() {
-        if !available {
-            continue;
+    if let Some(sensitivity) = sensitivity.filter(|s| s.valid) {
+        sensitivity.times(step, &mut ws.x_try);
+        if take_prediction(disc, x, target, before, true, ws) {
+            return (true, true);
         }
-        if let (0, Some(sensitivity)) = (which, sensitivity) {
-            sensitivity.times(step, &mut ws.x_try);
-        } else {
-            sensitivity_times(problem.predictor, step, &mut ws.x_try);
-        }
-        ws.x_try
-            .iter_mut()
-            .zip(x.iter())
-            .for_each(|(t, xi)| *t += xi);
-        ws.counts_try = disc.evaluate(
-            &ws.x_try,
-            target,
-            &ws.hist_base,
-            &mut ws.hist_try,
-            &mut ws.r_try,
-            Some(&mut ws.k_try),
-        );
-        // The tangent prediction is kept only if every ITZ point stays before the peak
-        // of the envelope (delta < delta_c): a step into softening can pass a limit point
-        // of the RVE response, and from the tangent prediction Newton then converges on
-        // the continuation of the pre-peak branch beyond it, where the elastic predictor
-        // lets it fall onto the post-snap branch (measured on the paper's section 5.2
-        // paths). Before the peak the equilibrium is unique and nothing changes but speed.
-        let softening = which == 0
-            && disc
-                .law
-                .is_some_and(|law| ws.hist_try.iter().any(|h| h.delta_max >= law.delta_c));
-        if !softening && norm(&ws.r_try) < before {
-            x.copy_from_slice(&ws.x_try);
-            accept_try(ws);
-            return (true, which == 0);
+    }
+    if problem.predictor.len() == 3 * n {
+        sensitivity_times(problem.predictor, step, &mut ws.x_try);
+        if take_prediction(disc, x, target, before, false, ws) {
+            return (true, false);
         }
     }
     (false, false)
+}
+
+/// Evaluates the prediction `x + ws.x_try` and takes it (into `x` and the current
+/// evaluation) if its residual is below `before` and, for a tangent prediction
+/// (`tangent`), every ITZ point stays before the peak of the envelope
+/// (`delta < delta_c`): a step into softening can pass a limit point of the RVE response,
+/// and from the tangent prediction Newton then converges on the continuation of the
+/// pre-peak branch beyond it, where the elastic predictor lets it fall onto the post-snap
+/// branch (measured on the paper's section 5.2 paths). Before the peak the equilibrium is
+/// unique and nothing changes but speed.
+fn take_prediction(
+    disc: &Discretization,
+    x: &mut [f64],
+    target: &[f64; 3],
+    before: f64,
+    tangent: bool,
+    ws: &mut Workspace,
+) -> bool {
+    ws.x_try
+        .iter_mut()
+        .zip(x.iter())
+        .for_each(|(t, xi)| *t += xi);
+    ws.counts_try = disc.evaluate(
+        &ws.x_try,
+        target,
+        &ws.hist_base,
+        &mut ws.hist_try,
+        &mut ws.r_try,
+        Some(&mut ws.k_try),
+    );
+    let softening = tangent
+        && disc
+            .law
+            .is_some_and(|law| ws.hist_try.iter().any(|h| h.delta_max >= law.delta_c));
+    if softening || norm(&ws.r_try) >= before {
+        return false;
+    }
+    x.copy_from_slice(&ws.x_try);
+    accept_try(ws);
+    true
 }
 
 /// Solves the RVE from the committed state to macro strain `eps`, writing the converged
@@ -601,8 +612,7 @@ pub fn solve_increment(
         hard |= outcome.is_err();
         let settings = if hard { &plain_settings } else { settings };
         if retry {
-            report.iterations += ws.residuals.len().saturating_sub(1) as u32;
-            trial.copy_from(&ws.substep_start);
+            restart(&mut report, trial, ws);
             let (evaluated, _) = predict(
                 problem,
                 None,
@@ -625,8 +635,7 @@ pub fn solve_increment(
         }
         // 2. Path following through a limit point, then Newton from the last arc point.
         if outcome.is_err() && settings.path_following {
-            report.iterations += ws.residuals.len().saturating_sub(1) as u32;
-            trial.copy_from(&ws.substep_start);
+            restart(&mut report, trial, ws);
             let reference = reference(disc, &target);
             if let Some((_, traced)) = trace(
                 disc, linear, settings, start, delta, done, to, reference, trial, ws,
@@ -651,8 +660,7 @@ pub fn solve_increment(
         }
         // 3. Secant iterations, then Newton, from the start of the sub-step.
         if outcome.is_err() && settings.max_secant_iterations > 0 {
-            report.iterations += ws.residuals.len().saturating_sub(1) as u32;
-            trial.copy_from(&ws.substep_start);
+            restart(&mut report, trial, ws);
             ws.hist_base.copy_from_slice(&trial.history);
             outcome = newton(
                 disc,
@@ -718,6 +726,13 @@ pub fn solve_increment(
     report.lu_factorizations = (ws.factor.lu_count - lu_before) as u32;
     report.lblt_factorizations = (ws.factor.lblt_count - lblt_before) as u32;
     Ok(report)
+}
+
+/// After a failed loop: counts its corrections and puts the trial back at the start of
+/// the sub-step, for the next remedy.
+fn restart(report: &mut IncrementReport, trial: &mut State, ws: &Workspace) {
+    report.iterations += ws.residuals.len().saturating_sub(1) as u32;
+    trial.copy_from(&ws.substep_start);
 }
 
 /// On a final failure: if the last iterate has closed ITZ points under the paper's contact
@@ -841,9 +856,9 @@ fn condensed_tangent(
             .fold(0.0f64, |m, v| m.max(v.abs()))
             .max(f64::MIN_POSITIVE);
         for sweep in 1..=TANGENT_SWEEPS {
-            ws.delta.copy_from_slice(&ws.kg_res);
-            linear.solve_in_place(&ws.factor, &mut ws.delta, 3, MemStack::new(&mut ws.stack));
-            ws.kg.iter_mut().zip(&ws.delta).for_each(|(x, d)| *x += d);
+            // The correction K_f^-1 R_k, in place: `residual` rewrites `kg_res` next.
+            linear.solve_in_place(&ws.factor, &mut ws.kg_res, 3, MemStack::new(&mut ws.stack));
+            ws.kg.iter_mut().zip(&ws.kg_res).for_each(|(x, d)| *x += d);
             let new_norm = residual(ws);
             let now = condensed(&ws.kg, Some(&ws.kg_res));
             let change = now

@@ -32,8 +32,6 @@ pub struct Workspace {
     /// Right-hand sides of a Newton correction with the tangent columns: `[-R | G]`.
     pub rhs4: Vec<f64>,
     pub kg_res: Vec<f64>,
-    /// Refinement correction of `kg`.
-    pub delta: Vec<f64>,
     /// Interface histories: start of the sub-step, trial, line-search trial.
     pub hist_base: Vec<CohesiveHistory>,
     pub hist_trial: Vec<CohesiveHistory>,
@@ -82,7 +80,6 @@ impl Workspace {
             kg_of_factor: false,
             rhs4: vec![0.0; 4 * n],
             kg_res: vec![0.0; 3 * n],
-            delta: vec![0.0; 3 * n],
             hist_base: vec![CohesiveHistory::default(); nh],
             hist_trial: vec![CohesiveHistory::default(); nh],
             hist_try: vec![CohesiveHistory::default(); nh],
