@@ -13,15 +13,23 @@
 //! together: each iteration solves `K dx_R = -R` and `K dx_f = -f` with one factorization,
 //! sets `dx = dx_R + dt dx_f` and takes `dt` from the (linear) constraint. Every converged arc
 //! point is committed into the trial history, exactly like a sub-step, so the interface
-//! history follows the traced path. The parameter `t` may decrease along a snap-back; once
-//! the path comes back and the next point would pass the target `t`, the remainder is a
-//! plain strain-controlled Newton solve at the target, from the last arc point, which lies
-//! on the stable post-snap branch.
+//! history follows the traced path. The parameter `t` may decrease along a snap-back.
+//!
+//! # Landing
+//! Once the path has come back and the next point would pass the target `t`, the tracer
+//! *lands*: a strain-controlled Newton solve at the target (at most [`MAX_LANDING`]
+//! iterations), from the tangent prediction `x_a + (t_target - t_a) dx_f` of the last arc
+//! point, which lies on the stable post-snap branch. If the landing does not converge, the
+//! arc length is halved and tracing goes on from the same point, so the next landing
+//! starts closer to the target, exactly as after a corrector that does not converge; the
+//! tracer gives up after [`MAX_CUTS`] failures in a row. (Handing a failed landing back to the caller instead cost a whole
+//! bisection of the macro step each time: on the README's robustness sample, one cohesive
+//! increment took 2374 iterations that way, see `docs/robustness.md`.)
 
 use faer::dyn_stack::MemStack;
 
 use super::linear::LinearSolver;
-use super::newton::{evaluate_current, factorize_current};
+use super::newton::{evaluate_current, factorize_current, newton, Mode};
 use crate::assembly::Discretization;
 use crate::element::TangentKind;
 use crate::scene::SolverSpec;
@@ -30,23 +38,40 @@ use crate::state::{State, Workspace};
 /// Most arc points per call, and corrector iterations per point.
 const MAX_POINTS: u32 = 400;
 const MAX_CORRECTOR: u32 = 12;
+/// Newton iterations of one landing attempt at the target strain.
+const MAX_LANDING: u32 = 12;
+/// Failed attempts in a row (each halves the arc length) after which the path is lost:
+/// the arc length is then 1/256 of the last one that worked.
+const MAX_CUTS: u32 = 8;
+/// The path is also lost when the arc length falls below this fraction of the first one:
+/// the tracer is stuck at a corner of the path, where tiny points converge at once and
+/// longer ones do not. (Before these two limits the only one was an arc length of 1e-10
+/// of the step: one increment of the robustness sample spent 436 factorizations at such
+/// a corner before the secant iterations solved it.)
+const MIN_LENGTH: f64 = 1e-4;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Outcome counters of a traced path.
+/// Work and progress of one traced path, counted whether or not it lands.
+#[derive(Default)]
 pub(super) struct Traced {
+    /// Corrector and landing iterations (one linear solve each).
     pub iterations: u32,
-    pub factorizations: u32,
+    /// Converged arc points.
     pub points: u32,
 }
 
-/// Traces the path of `eps_0 + t delta` from the converged `trial` at `t = from` until
-/// a point short of `to` from which strain control can take over; leaves that point in
-/// `trial` (strain, unknowns, history) and returns. The caller then solves at `to`.
-/// Returns `None` when the path cannot be followed (no real root, singular system,
-/// budget exhausted); `trial` then holds the last converged arc point, still valid.
+/// Traces the path of `eps_0 + t delta` from the converged `trial` at `t = from` and lands
+/// on `t = to` (see the module docs). On success (`true`) `trial.unknowns` is converged at
+/// `eps_0 + to delta` from the history in `ws.hist_base` (the last arc point's, also in
+/// `trial.history`), and `ws.r`/`ws.k`/`ws.hist_trial`/`ws.factor` belong to it, as after
+/// a converged Newton loop. Returns `false` when the path cannot be followed (no real
+/// root, singular system, [`MAX_CUTS`] failed attempts in a row, an arc length below
+/// [`MIN_LENGTH`] of the first, budget exhausted);
+/// `trial` then holds the last converged arc point, still valid. `work` counts what was
+/// done either way.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn trace(
     disc: &Discretization,
@@ -59,13 +84,13 @@ pub(super) fn trace(
     reference: f64,
     trial: &mut State,
     ws: &mut Workspace,
-) -> Option<(f64, Traced)> {
+    work: &mut Traced,
+) -> bool {
     let n = disc.n();
     let tolerance = settings.tolerance * reference;
-    let mut out = Traced {
-        iterations: 0,
-        factorizations: 0,
-        points: 0,
+    let landing = SolverSpec {
+        max_iterations: MAX_LANDING,
+        ..*settings
     };
     // f = G delta.
     for i in 0..n {
@@ -81,7 +106,8 @@ pub(super) fn trace(
     };
     let mut t_a = from;
     ws.arc_prev.iter_mut().for_each(|v| *v = 0.0);
-    let mut length = 0.0;
+    let (mut length, mut first_length) = (0.0, 0.0);
+    let mut cuts = 0;
 
     for _ in 0..MAX_POINTS {
         ws.hist_base.copy_from_slice(&trial.history);
@@ -95,9 +121,8 @@ pub(super) fn trace(
             ws,
         );
         if factorize_current(disc, linear, ws).is_err() {
-            return None;
+            return false;
         }
-        out.factorizations += 1;
         ws.arc_dxf
             .iter_mut()
             .zip(&ws.arc_f)
@@ -105,93 +130,136 @@ pub(super) fn trace(
         linear.solve_in_place(&ws.factor, &mut ws.arc_dxf, 1, MemStack::new(&mut ws.stack));
         let dxf_norm = dot(&ws.arc_dxf, &ws.arc_dxf).sqrt();
         if !(dxf_norm.is_finite() && dxf_norm > 0.0) {
-            return None;
+            return false;
         }
         if length == 0.0 {
             // Eight points would cover the rest of the increment on a straight path.
             length = (to - from) * dxf_norm / 8.0;
+            first_length = length;
         }
         // Direction: keep going the way the path went (positive t at the start).
-        let sign = if out.points == 0 || dot(&ws.arc_dxf, &ws.arc_prev) >= 0.0 {
+        let sign = if work.points == 0 || dot(&ws.arc_dxf, &ws.arc_prev) >= 0.0 {
             1.0
         } else {
             -1.0
         };
         let dt_pred = sign * length / dxf_norm;
-        if t_a + dt_pred >= to {
-            // The path has come back past the target: hand over to strain control.
-            return Some((t_a, out));
-        }
-        // Predictor (its direction stays the normal of the constraint plane).
-        ws.arc_pred.copy_from_slice(&ws.arc_dxf);
-        for i in 0..n {
-            trial.unknowns[i] = ws.arc_xa[i] + dt_pred * ws.arc_dxf[i];
-        }
-        let mut t = t_a + dt_pred;
-        let mut converged = false;
-        for _ in 0..MAX_CORRECTOR {
-            evaluate_current(
+        let converged = if t_a + dt_pred >= to {
+            // The path has come back past the target: land on it under strain control,
+            // from the tangent prediction.
+            for i in 0..n {
+                trial.unknowns[i] = ws.arc_xa[i] + (to - t_a) * ws.arc_dxf[i];
+            }
+            let outcome = newton(
                 disc,
-                &trial.unknowns,
-                &eps_at(t),
-                TangentKind::Consistent,
+                linear,
+                &landing,
+                &eps_at(to),
+                &mut trial.unknowns,
                 ws,
+                Mode::Newton,
+                false,
             );
-            let rnorm = dot(&ws.r, &ws.r).sqrt();
-            if !rnorm.is_finite() {
-                break;
+            work.iterations += ws.residuals.len().saturating_sub(1) as u32;
+            if outcome.is_ok() {
+                return true;
             }
-            if rnorm <= tolerance {
-                converged = true;
-                break;
+            false
+        } else {
+            let t = correct(
+                disc, linear, tolerance, &eps_at, t_a, dt_pred, length, trial, ws, work,
+            );
+            if let Some(t) = t {
+                for i in 0..n {
+                    ws.arc_prev[i] = trial.unknowns[i] - ws.arc_xa[i];
+                }
+                trial.history.copy_from_slice(&ws.hist_trial);
+                trial.strain = eps_at(t);
+                t_a = t;
+                work.points += 1;
+                length *= 1.25;
             }
-            if factorize_current(disc, linear, ws).is_err() {
-                break;
-            }
-            out.factorizations += 1;
-            out.iterations += 1;
-            // dx_R into ws.dx, dx_f into ws.arc_dxf (both with this factorization).
-            ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
-            linear.solve_in_place(&ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
-            ws.arc_dxf
-                .iter_mut()
-                .zip(&ws.arc_f)
-                .for_each(|(d, f)| *d = -f);
-            linear.solve_in_place(&ws.factor, &mut ws.arc_dxf, 1, MemStack::new(&mut ws.stack));
-            // Riks' normal plane: ((x - x_a) + dx_R + dt dx_f) . p = length^2, with p the
-            // predictor step: linear in dt, so always solvable (a circle may miss the
-            // linearized path at a kink of the law).
-            let (mut cur_p, mut dxf_p) = (0.0, 0.0);
-            for i in 0..n {
-                let p = dt_pred * ws.arc_pred[i];
-                cur_p += (trial.unknowns[i] - ws.arc_xa[i] + ws.dx[i]) * p;
-                dxf_p += ws.arc_dxf[i] * p;
-            }
-            if dxf_p == 0.0 || !dxf_p.is_finite() {
-                break;
-            }
-            let dt = (length * length - cur_p) / dxf_p;
-            for i in 0..n {
-                trial.unknowns[i] += ws.dx[i] + dt * ws.arc_dxf[i];
-            }
-            t += dt;
-        }
+            t.is_some()
+        };
         if converged {
-            for i in 0..n {
-                ws.arc_prev[i] = trial.unknowns[i] - ws.arc_xa[i];
-            }
-            trial.history.copy_from_slice(&ws.hist_trial);
-            trial.strain = eps_at(t);
-            t_a = t;
-            out.points += 1;
-            length *= 1.25;
+            cuts = 0;
         } else {
             trial.unknowns.copy_from_slice(&ws.arc_xa);
             length *= 0.5;
-            if length < 1e-10 * dxf_norm * (to - from) {
-                return None;
+            cuts += 1;
+            if cuts > MAX_CUTS || length < MIN_LENGTH * first_length {
+                return false;
             }
         }
+    }
+    false
+}
+
+/// The corrector of one arc step of length `length` from the arc point `ws.arc_xa` at
+/// `t_a`, predicted along `dt_pred ws.arc_dxf`: Newton on the residual and Riks' normal
+/// plane together. Returns the converged `t` (the unknowns are in `trial`), or `None`.
+#[allow(clippy::too_many_arguments)]
+fn correct(
+    disc: &Discretization,
+    linear: &LinearSolver,
+    tolerance: f64,
+    eps_at: &impl Fn(f64) -> [f64; 3],
+    t_a: f64,
+    dt_pred: f64,
+    length: f64,
+    trial: &mut State,
+    ws: &mut Workspace,
+    work: &mut Traced,
+) -> Option<f64> {
+    let n = disc.n();
+    // Predictor (its direction stays the normal of the constraint plane).
+    ws.arc_pred.copy_from_slice(&ws.arc_dxf);
+    for i in 0..n {
+        trial.unknowns[i] = ws.arc_xa[i] + dt_pred * ws.arc_dxf[i];
+    }
+    let mut t = t_a + dt_pred;
+    for _ in 0..MAX_CORRECTOR {
+        evaluate_current(
+            disc,
+            &trial.unknowns,
+            &eps_at(t),
+            TangentKind::Consistent,
+            ws,
+        );
+        let rnorm = dot(&ws.r, &ws.r).sqrt();
+        if !rnorm.is_finite() {
+            return None;
+        }
+        if rnorm <= tolerance {
+            return Some(t);
+        }
+        factorize_current(disc, linear, ws).ok()?;
+        work.iterations += 1;
+        // dx_R into ws.dx, dx_f into ws.arc_dxf (both with this factorization).
+        ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
+        linear.solve_in_place(&ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
+        ws.arc_dxf
+            .iter_mut()
+            .zip(&ws.arc_f)
+            .for_each(|(d, f)| *d = -f);
+        linear.solve_in_place(&ws.factor, &mut ws.arc_dxf, 1, MemStack::new(&mut ws.stack));
+        // Riks' normal plane: ((x - x_a) + dx_R + dt dx_f) . p = length^2, with p the
+        // predictor step: linear in dt, so always solvable (a circle may miss the
+        // linearized path at a kink of the law).
+        let (mut cur_p, mut dxf_p) = (0.0, 0.0);
+        for i in 0..n {
+            let p = dt_pred * ws.arc_pred[i];
+            cur_p += (trial.unknowns[i] - ws.arc_xa[i] + ws.dx[i]) * p;
+            dxf_p += ws.arc_dxf[i] * p;
+        }
+        if dxf_p == 0.0 || !dxf_p.is_finite() {
+            return None;
+        }
+        let dt = (length * length - cur_p) / dxf_p;
+        for i in 0..n {
+            trial.unknowns[i] += ws.dx[i] + dt * ws.arc_dxf[i];
+        }
+        t += dt;
     }
     None
 }

@@ -66,6 +66,9 @@ pub struct NumericFactor {
     probe_image: Vec<f64>,
     /// What the last successful factorization was, if any.
     pub current: Option<FactorKind>,
+    /// Numeric factorizations of any kind done with these buffers so far (an LL^T that
+    /// fails on a non-positive pivot is part of the LBL^T or LU that follows it).
+    pub count: u64,
     /// LU factorizations done with these buffers so far. faer's supernodal LU allocates
     /// internally (LL^T does not), so this counts the updates that left the
     /// allocation-free path.
@@ -123,6 +126,7 @@ impl LinearSolver {
             probe: vec![0.0; n],
             probe_image: vec![0.0; n],
             current: None,
+            count: 0,
             lu_count: 0,
             lblt_count: 0,
         }
@@ -156,6 +160,7 @@ impl LinearSolver {
         stack: &mut MemStack,
     ) -> std::result::Result<FactorKind, String> {
         numeric.current = None;
+        numeric.count += 1;
         let a = SparseColMatRef::new(pattern.as_ref(), values);
         if let (true, Some(c)) = (try_cholesky, &self.cholesky) {
             let ok = c

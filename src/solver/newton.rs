@@ -75,7 +75,7 @@
 
 use faer::dyn_stack::MemStack;
 
-use super::arclength::trace;
+use super::arclength::{trace, Traced};
 use super::linear::LinearSolver;
 use crate::assembly::Discretization;
 use crate::element::TangentKind;
@@ -115,7 +115,7 @@ pub struct IncrementReport {
 }
 
 /// Why one Newton loop failed.
-enum Failure {
+pub(super) enum Failure {
     NotConverged {
         residual: f64,
         reference: f64,
@@ -207,7 +207,7 @@ pub(super) fn factorize_current(
 
 /// How a Newton loop globalizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Mode {
+pub(super) enum Mode {
     /// Consistent Newton with backtracking line search.
     Newton,
     /// Secant iterations, switching to Newton near convergence (see module docs).
@@ -241,7 +241,7 @@ const SECANT_HANDOVER: f64 = 100.0;
 /// `ws.r`/`ws.k`/`ws.hist_trial`/`ws.counts` belong to it (`ws.k` is the consistent
 /// tangent), and `ws.factor` holds the last factorization (if any).
 #[allow(clippy::too_many_arguments)]
-fn newton(
+pub(super) fn newton(
     disc: &Discretization,
     linear: &LinearSolver,
     settings: &SolverSpec,
@@ -250,7 +250,7 @@ fn newton(
     ws: &mut Workspace,
     mode: Mode,
     evaluated: bool,
-) -> std::result::Result<(u32, u32), Failure> {
+) -> std::result::Result<u32, Failure> {
     let reference = reference(disc, eps);
     let tolerance = settings.tolerance * reference;
     let max_iterations = match mode {
@@ -268,7 +268,6 @@ fn newton(
         evaluate_current(disc, x, eps, kind, ws);
     }
     let mut rnorm = norm(&ws.r);
-    let mut factorizations = 0;
     let mut iteration = 0u32;
     let mut chord = false;
     loop {
@@ -284,7 +283,7 @@ fn newton(
                 evaluate_current(disc, x, eps, TangentKind::Consistent, ws);
                 ws.factored = false;
             }
-            return Ok((iteration, factorizations));
+            return Ok(iteration);
         }
         // No stagnation cut: giving up once the residual has not halved in 10 (or 20)
         // iterations saved 28 (18) of the 101 iterations at the paper path's snap-back,
@@ -299,7 +298,6 @@ fn newton(
         let fresh = !(chord && ws.factored);
         if fresh {
             factorize_current(disc, linear, ws).map_err(Failure::Singular)?;
-            factorizations += 1;
             ws.k_factored.copy_from_slice(&ws.k);
             ws.factored = kind == TangentKind::Consistent;
         }
@@ -531,7 +529,8 @@ pub fn solve_increment(
         settings,
         ..
     } = *problem;
-    let (lu_before, lblt_before) = (ws.factor.lu_count, ws.factor.lblt_count);
+    let (count_before, lu_before, lblt_before) =
+        (ws.factor.count, ws.factor.lu_count, ws.factor.lblt_count);
     trial.copy_from(committed);
     let mut report = IncrementReport::default();
     if disc.n() == 0 {
@@ -637,26 +636,18 @@ pub fn solve_increment(
         if outcome.is_err() && settings.path_following {
             restart(&mut report, trial, ws);
             let reference = reference(disc, &target);
-            if let Some((_, traced)) = trace(
-                disc, linear, settings, start, delta, done, to, reference, trial, ws,
-            ) {
-                report.iterations += traced.iterations;
-                report.factorizations += traced.factorizations;
-                report.substeps += traced.points;
-                ws.hist_base.copy_from_slice(&trial.history);
-                outcome = newton(
-                    disc,
-                    linear,
-                    settings,
-                    &target,
-                    &mut trial.unknowns,
-                    ws,
-                    Mode::Newton,
-                    false,
-                );
+            let mut work = Traced::default();
+            let landed = trace(
+                disc, linear, settings, start, delta, done, to, reference, trial, ws, &mut work,
+            );
+            report.substeps += work.points;
+            outcome = if landed {
+                // On the target, from the last arc point's history (the sub-step's).
+                Ok(work.iterations)
             } else {
-                outcome = Err(Failure::PathLost);
-            }
+                report.iterations += work.iterations;
+                Err(Failure::PathLost)
+            };
         }
         // 3. Secant iterations, then Newton, from the start of the sub-step.
         if outcome.is_err() && settings.max_secant_iterations > 0 {
@@ -674,9 +665,8 @@ pub fn solve_increment(
             );
         }
         match outcome {
-            Ok((iterations, factorizations)) => {
+            Ok(iterations) => {
                 report.iterations += iterations;
-                report.factorizations += factorizations;
                 report.substeps += 1;
                 trial.history.copy_from_slice(&ws.hist_trial);
                 trial.strain = target;
@@ -718,11 +708,11 @@ pub fn solve_increment(
     report.unloading = counts.unloading;
     report.contact = counts.contact;
     if request == TangentRequest::Consistent {
-        let (condensed, factorizations) = condensed_tangent(disc, linear, ws)?;
-        report.factorizations += factorizations;
+        let condensed = condensed_tangent(disc, linear, ws)?;
         *tangent = hom.tangent_from_condensed(&condensed);
         trial.sensitivity.store_negated(&ws.kg);
     }
+    report.factorizations = (ws.factor.count - count_before) as u32;
     report.lu_factorizations = (ws.factor.lu_count - lu_before) as u32;
     report.lblt_factorizations = (ws.factor.lblt_count - lblt_before) as u32;
     Ok(report)
@@ -803,7 +793,7 @@ fn linear_response(
 
 /// Computes the condensed term `C = G^T K^-1 G` (3 x 3, row-major) at the converged state
 /// (`ws.k`) and leaves the best `X ~ K^-1 G` in `ws.kg`, reusing the last factorization
-/// `K_f` when it can (see module docs). Returns `C` and the factorizations it did.
+/// `K_f` when it can (see module docs).
 ///
 /// With `K_f != K`, `X_0 = K_f^-1 G` is refined by sweeps `X_{k+1} = X_k + K_f^-1 R_k`,
 /// `R_k = G - K X_k`, and `C` is taken from the stationary (variational) form
@@ -816,7 +806,7 @@ fn condensed_tangent(
     disc: &Discretization,
     linear: &LinearSolver,
     ws: &mut Workspace,
-) -> Result<([f64; 9], u32)> {
+) -> Result<[f64; 9]> {
     let n = disc.n();
     let condensed = |x: &[f64], res: Option<&[f64]>| -> [f64; 9] {
         let mut out = [0.0; 9];
@@ -840,7 +830,7 @@ fn condensed_tangent(
             linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
         }
         if unchanged {
-            return Ok((condensed(&ws.kg, None), 0));
+            return Ok(condensed(&ws.kg, None));
         }
         let residual = |ws: &mut Workspace| {
             disc.pattern.mul_symmetric3(&ws.k, &ws.kg, &mut ws.kg_res);
@@ -872,7 +862,7 @@ fn condensed_tangent(
                 break;
             }
             if error <= TANGENT_ACCURACY || new_norm == 0.0 {
-                return Ok((now, 0));
+                return Ok(now);
             }
             // Each further sweep multiplies the error by rho^2: give up early if the
             // budget cannot reach the accuracy.
@@ -893,5 +883,5 @@ fn condensed_tangent(
     ws.factored = true;
     ws.kg.copy_from_slice(&disc.g);
     linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
-    Ok((condensed(&ws.kg, None), 1))
+    Ok(condensed(&ws.kg, None))
 }
