@@ -39,7 +39,14 @@ pub struct SystemEvaluation {
     pub loading: usize,
     pub unloading: usize,
     pub contact: usize,
+    /// A hash (FNV-1a) of the branch of every interface point, in order: two evaluations
+    /// with the same signature have (but for a hash collision) every point on the same
+    /// branch, so the system is smooth between them and Newton's rate is quadratic there.
+    pub branch_signature: u64,
 }
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_PRIME: u64 = 0x0100_0000_01b3;
 
 /// Everything needed to assemble the RVE system; immutable and shared.
 #[derive(Clone, Debug)]
@@ -223,7 +230,10 @@ impl Discretization {
         if let Some(k) = k.as_deref_mut() {
             k.copy_from_slice(&self.k_const);
         }
-        let mut counts = SystemEvaluation::default();
+        let mut counts = SystemEvaluation {
+            branch_signature: FNV_OFFSET,
+            ..Default::default()
+        };
         let Some(law) = &self.law else {
             return counts;
         };
@@ -243,6 +253,8 @@ impl Discretization {
             counts.loading += resp.loading;
             counts.unloading += resp.unloading;
             counts.contact += resp.contact;
+            counts.branch_signature =
+                (counts.branch_signature ^ u64::from(resp.branches)).wrapping_mul(FNV_PRIME);
             for (i, &d) in dofs.iter().enumerate() {
                 if d != FIXED {
                     r[d as usize] += resp.force[i];

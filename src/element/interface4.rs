@@ -165,6 +165,9 @@ pub struct InterfaceResponse {
     pub unloading: usize,
     /// Number of points in contact.
     pub contact: usize,
+    /// The branch of every point, two bits each from the lowest (point `i` at bits
+    /// `2i..2i+2`): 1 loading, 2 unloading, 3 contact.
+    pub branches: u8,
 }
 
 impl InterfaceResponse {
@@ -273,17 +276,30 @@ pub fn evaluate_with(
     let mut fb = SVector::<f64, 4>::zeros();
     let mut a = SMatrix::<f64, 4, 4>::zeros();
     let (mut loading, mut unloading, mut contact) = (0, 0, 0);
+    let mut branches = 0u8;
 
-    for ((&(xi, w), hist), out) in rule.iter().zip(committed).zip(trial.iter_mut()) {
+    for (point, ((&(xi, w), hist), out)) in
+        rule.iter().zip(committed).zip(trial.iter_mut()).enumerate()
+    {
         let shape = [0.5 * (1.0 - xi), 0.5 * (1.0 + xi)];
         let jl = r * (j0 * shape[0] + j1 * shape[1]);
         let p = law.evaluate(hist, [jl[0], jl[1]], geometry.length);
         *out = p.history;
-        match p.branch {
-            Branch::Loading => loading += 1,
-            Branch::Unloading => unloading += 1,
-            Branch::Contact => contact += 1,
-        }
+        let code = match p.branch {
+            Branch::Loading => {
+                loading += 1;
+                1
+            }
+            Branch::Unloading => {
+                unloading += 1;
+                2
+            }
+            Branch::Contact => {
+                contact += 1;
+                3
+            }
+        };
+        branches |= code << (2 * point);
         let wl = w * half_l;
         let tg = r.transpose() * p.traction;
         let c = match kind {
@@ -317,6 +333,7 @@ pub fn evaluate_with(
         loading,
         unloading,
         contact,
+        branches,
     }
 }
 

@@ -61,6 +61,9 @@ pub(super) struct Traced {
     pub iterations: u32,
     /// Converged arc points.
     pub points: u32,
+    /// Limit points of the strain along the traced path: turns of `t` between successive
+    /// arc points. A snap-back shows two (a maximum, then a minimum of the strain).
+    pub limit_points: u32,
 }
 
 /// Traces the path of `eps_0 + t delta` from the converged `trial` at `t = from` and lands
@@ -108,6 +111,7 @@ pub(super) fn trace(
     ws.arc_prev.iter_mut().for_each(|v| *v = 0.0);
     let (mut length, mut first_length) = (0.0, 0.0);
     let mut cuts = 0;
+    let mut going_forward = true;
 
     for _ in 0..MAX_POINTS {
         ws.hist_base.copy_from_slice(&trial.history);
@@ -175,6 +179,11 @@ pub(super) fn trace(
                 }
                 trial.history.copy_from_slice(&ws.hist_trial);
                 trial.strain = eps_at(t);
+                let forward = t > t_a;
+                if forward != going_forward {
+                    work.limit_points += 1;
+                    going_forward = forward;
+                }
                 t_a = t;
                 work.points += 1;
                 length *= 1.25;

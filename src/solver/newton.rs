@@ -108,6 +108,13 @@ pub struct IncrementReport {
     pub lu_factorizations: u32,
     /// How many were the checked LBL^T (indefinite tangent); the rest were LL^T.
     pub lblt_factorizations: u32,
+    /// Limit points of the macro strain along the equilibrium paths traced by path
+    /// following in this update (a snap-back of the RVE response counts two: the strain
+    /// passes a maximum, then a minimum). Non-zero means the strain-controlled equilibrium
+    /// is not continuous over the increment: the RVE snapped back (a material instability
+    /// at this point of the host), and no strain-controlled Newton loop can be expected to
+    /// converge in a few iterations there.
+    pub limit_points: u32,
     /// Interface points on the loading / unloading / contact branch at the end.
     pub loading: usize,
     pub unloading: usize,
@@ -210,6 +217,9 @@ pub(super) fn factorize_current(
 pub(super) enum Mode {
     /// Consistent Newton with backtracking line search.
     Newton,
+    /// The same, giving up early once the residual stagnates (see [`STAGNATION_WINDOW`]):
+    /// the first try on a whole increment, where path following comes next.
+    NewtonUntilStagnant,
     /// Secant iterations, switching to Newton near convergence (see module docs).
     SecantThenNewton,
 }
@@ -239,7 +249,10 @@ const TANGENT_ACCURACY: f64 = 1e-10;
 /// the full `max_iterations` budget: cohesive-law iterations 7939 -> 6509 and solver time
 /// 10.0 -> 8.7 s with no failure either way; paper-law failures 24 -> 25 of 49, which
 /// flip with round-off (see the README). (Before path following landed on the target
-/// itself, this cut made one cohesive path fail.)
+/// itself, this cut made one cohesive path fail.) Only the first try on a step that has
+/// not been bisected gives up early ([`Mode::NewtonUntilStagnant`]): in the sub-steps of a
+/// bisection slow Newton is the remedy that works, and cutting it there made the paper-law
+/// path `scenes/paper/rve_circles_3e-4.toml` fail (`tests/paper_examples.rs`).
 const STAGNATION_WINDOW: u32 = 10;
 
 /// Secant iterations hand over to Newton below this multiple of the tolerance.
@@ -264,16 +277,17 @@ pub(super) fn newton(
     let reference = reference(disc, eps);
     let tolerance = settings.tolerance * reference;
     let max_iterations = match mode {
-        Mode::Newton => settings.max_iterations,
+        Mode::Newton | Mode::NewtonUntilStagnant => settings.max_iterations,
         Mode::SecantThenNewton => settings.max_secant_iterations,
     };
     let mut kind = match mode {
-        Mode::Newton => TangentKind::Consistent,
+        Mode::Newton | Mode::NewtonUntilStagnant => TangentKind::Consistent,
         Mode::SecantThenNewton => TangentKind::Secant,
     };
     ws.factored = false;
     ws.kg_of_factor = false;
     ws.residuals.clear();
+    ws.branch_signatures.clear();
     if !(evaluated && kind == TangentKind::Consistent) {
         evaluate_current(disc, x, eps, kind, ws);
     }
@@ -283,6 +297,7 @@ pub(super) fn newton(
     loop {
         if ws.residuals.len() < ws.residuals.capacity() {
             ws.residuals.push(rnorm / reference);
+            ws.branch_signatures.push(ws.counts.branch_signature);
         }
         if !rnorm.is_finite() {
             return Err(Failure::NonFinite);
@@ -299,7 +314,7 @@ pub(super) fn newton(
         // [`STAGNATION_WINDOW`] iterations gives up before its budget and hands over to the
         // next remedy (see the constant).
         let window = STAGNATION_WINDOW as usize;
-        let stagnant = mode == Mode::Newton && ws.residuals.len() > window && {
+        let stagnant = mode == Mode::NewtonUntilStagnant && ws.residuals.len() > window && {
             let k = ws.residuals.len();
             ws.residuals[k - 1] > 0.5 * ws.residuals[k - 1 - window]
         };
@@ -341,7 +356,7 @@ pub(super) fn newton(
 
         // The matrix of the next iterate: secant until the hand-over, then consistent.
         let next_kind = match mode {
-            Mode::Newton => TangentKind::Consistent,
+            Mode::Newton | Mode::NewtonUntilStagnant => TangentKind::Consistent,
             Mode::SecantThenNewton => kind,
         };
         let new_norm = if kind == TangentKind::Consistent {
@@ -621,7 +636,11 @@ pub fn solve_increment(
             &target,
             &mut trial.unknowns,
             ws,
-            Mode::Newton,
+            if depth == 0 {
+                Mode::NewtonUntilStagnant
+            } else {
+                Mode::Newton
+            },
             evaluated,
         );
         // 1b. Near a limit point the tangent predictor can overshoot into the basin of
@@ -664,6 +683,7 @@ pub fn solve_increment(
             report.substeps += work.points;
             outcome = if landed {
                 // On the target, from the last arc point's history (the sub-step's).
+                report.limit_points += work.limit_points;
                 Ok(work.iterations)
             } else {
                 report.iterations += work.iterations;

@@ -49,6 +49,11 @@ pub struct Workspace {
     pub counts_try: SystemEvaluation,
     /// Residual norms of the last Newton loop (for convergence studies).
     pub residuals: Vec<f64>,
+    /// The interface branch signature of each of those iterates
+    /// ([`crate::assembly::SystemEvaluation::branch_signature`]): where two successive ones
+    /// agree, no point changed branch and the correction between them is a Newton step on
+    /// a smooth system.
+    pub branch_signatures: Vec<u64>,
     /// Which model this workspace was sized for.
     pub(crate) model_id: u64,
 }
@@ -92,6 +97,7 @@ impl Workspace {
             counts: SystemEvaluation::default(),
             counts_try: SystemEvaluation::default(),
             residuals: Vec::with_capacity(max_iterations + 2),
+            branch_signatures: Vec::with_capacity(max_iterations + 2),
             model_id,
         }
     }
