@@ -123,6 +123,18 @@ fn main() {
         "| per instance | {:.1} KiB |",
         1024.0 * (rss - rss0) / n as f64
     );
+    // 2b. Steady state: committed, then updated again, every state of every instance
+    // holds a sensitivity (a virgin one has none).
+    for &h in &handles {
+        assert_eq!(rve_commit(h), 0);
+    }
+    batch(n, 2);
+    let rss_steady = peak_rss_mib();
+    println!(
+        "| peak RSS after {n} instances committed and updated again | {:.0} MiB ({:.1} KiB per instance) |",
+        rss_steady,
+        1024.0 * (rss_steady - rss0) / n as f64
+    );
     // 3. Batch throughput (consistent tangent).
     let m = n.min(4000);
     let tp1 = batch(m, 1);

@@ -131,7 +131,12 @@ fn bench(path: &str) -> Row {
             );
         }
     }
-    let inst = Instance::new(model.clone());
+    // A converged state with its sensitivity (a virgin one has no sensitivity buffers).
+    let mut inst = Instance::new(model.clone());
+    let mut ws = model.workspace();
+    inst.update([1e-5, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+        .expect("first increment");
+    inst.commit().unwrap();
     Row {
         name: path.rsplit('/').next().unwrap_or(path).to_string(),
         unknowns: model.disc.n(),

@@ -269,6 +269,12 @@ fn solver_failure_keeps_the_committed_state_and_suggests_a_smaller_step() {
     rve_free(h);
 }
 
+/// Bytes of a filled format 4 sensitivity for `n` unknowns (bincode: the valid flag, the
+/// block scales (f32) and the 3n i8 values, each vector after its u64 length).
+fn sensitivity_bytes(n: usize) -> usize {
+    1 + 8 + 4 * (3 * n).div_ceil(rve::state::SENSITIVITY_BLOCK) + 8 + 3 * n
+}
+
 #[test]
 fn state_bytes_round_trip_and_refuse_foreign_states() {
     let h = init_paper();
@@ -302,17 +308,18 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     assert_eq!(load(&[1, 2, 3]), RveStatus::BadState as u32);
     assert_eq!(load(&[0u8; 100]), RveStatus::BadState as u32);
     assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
-    for unknown_version in [0u8, 4] {
+    for unknown_version in [0u8, 5] {
         let mut other_version = bytes.clone();
         other_version[8] = unknown_version;
         assert_eq!(load(&other_version), RveStatus::StateVersion as u32);
     }
     // A negative delta_max is refused, and the instance keeps its state.
     // The payload ends with the history and then the sensitivity (bincode: a bool, three
-    // scales, a length and 3n i16 values).
+    // block scales with their length, 3n i8 values with theirs: filled by the committed
+    // update with tangent).
     let mut negative = bytes.clone();
     let n = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
-    let last = negative.len() - (1 + 24 + 8 + 6 * n) - 8;
+    let last = negative.len() - sensitivity_bytes(n) - 8;
     negative[last..last + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
     assert_eq!(load(&negative), RveStatus::BadState as u32);
     let (_, sig_c, _) = update(h2, next);
@@ -476,8 +483,8 @@ fn one_instance_from_two_threads_is_busy_or_fine_never_corrupt() {
 /// history as `[delta_max, t_max]` pairs) from `scenes/paper_rve.toml` after one committed
 /// update to `[1.5e-4, 0, 0]` (made by `scripts/make_state_format1.sh`, kept for this
 /// test). This library reads it, and the restarted instance continues like one that
-/// computed the same state itself, to the Newton tolerance (see below). A format 2 state
-/// (format 3 without the sensitivity) loads too.
+/// computed the same state itself, to the Newton tolerance (see below). Format 2 (no
+/// sensitivity) and format 3 (a 16-bit sensitivity, dropped on loading) states load too.
 #[test]
 fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
     let bytes = std::fs::read(common::repo("tests/data/state_format1_paper_rve.bin")).unwrap();
@@ -510,7 +517,7 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         "{sig_old:?} vs {sig_new:?}"
     );
     assert!(rel(&d_old, &d_new) <= 1e-6, "{d_old:?} vs {d_new:?}");
-    // Saved again, it is the current format (3) with the sensitivity, and loads back.
+    // Saved again, it is the current format (4) with the sensitivity, and loads back.
     let mut size = 0;
     assert_eq!(rve_commit(old), OK);
     assert_eq!(unsafe { rve_state_size(old, &mut size) }, OK);
@@ -520,25 +527,37 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         unsafe { rve_state_save(old, saved.as_mut_ptr(), size, &mut written) },
         OK
     );
-    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 3);
+    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 4);
     assert_eq!(
         unsafe { rve_state_load(fresh, saved.as_ptr(), written) },
         OK
     );
     // Format 2: the same payload without the trailing sensitivity.
     let n = u64::from_le_bytes(saved[16..24].try_into().unwrap()) as usize;
-    let mut format2 = saved[..written - (1 + 24 + 8 + 6 * n)].to_vec();
-    format2[8..12].copy_from_slice(&2u32.to_le_bytes());
-    let payload = (format2.len() - 40) as u64;
-    format2[32..40].copy_from_slice(&payload.to_le_bytes());
-    assert_eq!(
-        unsafe { rve_state_load(fresh, format2.as_ptr(), format2.len()) },
-        OK
-    );
-    let (s2, sig_2, _) = update(fresh, [1.7e-4, 0.0, 0.0]);
-    let (s3, sig_3, _) = update(old, [1.7e-4, 0.0, 0.0]);
-    assert_eq!((s2, s3), (OK, OK));
-    assert!(rel(&sig_2, &sig_3) <= 1e-6, "{sig_2:?} vs {sig_3:?}");
+    let with_version = |mut bytes: Vec<u8>, version: u32| {
+        bytes[8..12].copy_from_slice(&version.to_le_bytes());
+        let payload = (bytes.len() - 40) as u64;
+        bytes[32..40].copy_from_slice(&payload.to_le_bytes());
+        bytes
+    };
+    let format2 = with_version(saved[..written - sensitivity_bytes(n)].to_vec(), 2);
+    // Format 3: format 2 plus a 16-bit sensitivity (here a valid one of zeros).
+    let mut format3 = format2.clone();
+    format3.push(1);
+    format3.extend_from_slice(&[0u8; 24]);
+    format3.extend_from_slice(&(3 * n as u64).to_le_bytes());
+    format3.extend(std::iter::repeat_n(0u8, 6 * n));
+    let format3 = with_version(format3, 3);
+    let (_, sig_old, _) = update(old, [1.7e-4, 0.0, 0.0]);
+    for bytes in [format2, format3] {
+        assert_eq!(
+            unsafe { rve_state_load(fresh, bytes.as_ptr(), bytes.len()) },
+            OK
+        );
+        let (s, sig, _) = update(fresh, [1.7e-4, 0.0, 0.0]);
+        assert_eq!(s, OK);
+        assert!(rel(&sig, &sig_old) <= 1e-6, "{sig:?} vs {sig_old:?}");
+    }
     for h in [old, fresh] {
         assert_eq!(rve_free(h), OK);
     }

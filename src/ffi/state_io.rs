@@ -19,18 +19,19 @@
 //! |---|---|---|
 //! | 1 | 0.1.0 | `[delta_max, t_max]` per point (read, `t_max` dropped) |
 //! | 2 | main after 0.1.0 | `delta_max` per point (read, no sensitivity: the next increment starts from the elastic predictor) |
-//! | 3 | after 0.2.0 | format 2 plus the predictor's sensitivity ([`crate::state::Sensitivity`]) (written) |
+//! | 3 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 16-bit (read, sensitivity dropped: the next increment starts from the elastic predictor) |
+//! | 4 | main after 0.1.0 | format 2 plus the sensitivity's 8-bit deviation from the model's elastic one, empty until filled ([`crate::state::Sensitivity`]) (written) |
 
 use super::boundary::{Failure, FfiResult};
 use super::status::RveStatus;
 use crate::model::Model;
-use crate::state::{State, StateFormat1, StateFormat2};
+use crate::state::{State, StateFormat1, StateFormat2, StateFormat3, SENSITIVITY_BLOCK};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 3;
+pub const STATE_FORMAT_VERSION: u32 = 4;
 /// Older formats this library still reads.
-const READABLE_OLD_FORMATS: [u32; 2] = [1, 2];
+const READABLE_OLD_FORMATS: [u32; 3] = [1, 2, 3];
 const HEADER: usize = 40;
 
 fn sizes(model: &Model) -> (u64, u64) {
@@ -113,12 +114,19 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
         bincode::deserialize::<StateFormat2>(payload)
             .map_err(|e| bad(&e.to_string()))?
             .into()
+    } else if version == 3 {
+        bincode::deserialize::<StateFormat3>(payload)
+            .map_err(|e| bad(&e.to_string()))?
+            .into()
     } else {
         bincode::deserialize(payload).map_err(|e| bad(&e.to_string()))?
     };
     if state.unknowns.len() as u64 != n
         || state.history.len() as u64 != nh
-        || state.sensitivity.values.len() as u64 != 3 * n
+        || !(state.sensitivity.values.is_empty() && !state.sensitivity.valid
+            || state.sensitivity.values.len() as u64 == 3 * n
+                && state.sensitivity.scales.len()
+                    == state.sensitivity.values.len().div_ceil(SENSITIVITY_BLOCK))
     {
         return Err(bad("payload sizes disagree with the header"));
     }
@@ -126,8 +134,8 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
         .strain
         .iter()
         .chain(&state.unknowns)
-        .chain(&state.sensitivity.scale)
         .any(|v| !v.is_finite())
+        || state.sensitivity.scales.iter().any(|v| !v.is_finite())
     {
         return Err(bad("non-finite values"));
     }

@@ -3,5 +3,7 @@
 mod instance_state;
 mod workspace;
 
-pub use instance_state::{Sensitivity, State, StateFormat1, StateFormat2};
+pub use instance_state::{
+    Sensitivity, State, StateFormat1, StateFormat2, StateFormat3, SENSITIVITY_BLOCK,
+};
 pub use workspace::Workspace;
