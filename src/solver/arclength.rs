@@ -26,9 +26,10 @@
 //! point, which lies on the stable post-snap branch. If the landing does not converge, the
 //! arc length is halved and tracing goes on from the same point, so the next landing
 //! starts closer to the target, exactly as after a corrector that does not converge; the
-//! tracer gives up after [`MAX_CUTS`] failures in a row. (Handing a failed landing back to the caller instead cost a whole
-//! bisection of the macro step each time: on the README's robustness sample, one cohesive
-//! increment took 2374 iterations that way, see `docs/robustness.md`.)
+//! tracer gives up after [`MAX_CUTS`] failures in a row. (Handing a failed landing back to
+//! the caller instead cost a whole bisection of the macro step each time: on the README's
+//! robustness sample, one cohesive increment took 2374 iterations that way, see
+//! `docs/robustness.md`.)
 
 use faer::dyn_stack::MemStack;
 
@@ -76,9 +77,8 @@ pub(super) struct Traced {
 /// `trial.history`), and `ws.r`/`ws.k`/`ws.hist_trial`/`ws.factor` belong to it, as after
 /// a converged Newton loop. Returns `false` when the path cannot be followed (no real
 /// root, singular system, [`MAX_CUTS`] failed attempts in a row, an arc length below
-/// [`MIN_LENGTH`] of the first, budget exhausted);
-/// `trial` then holds the last converged arc point, still valid. `work` counts what was
-/// done either way.
+/// [`MIN_LENGTH`] of the first, budget exhausted); `trial` then holds the last converged
+/// arc point, still valid. `work` counts what was done either way.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn trace(
     disc: &Discretization,
@@ -200,17 +200,20 @@ pub(super) fn trace(
                 // the wide one a snap of `tests/closed_form_interface.rs` landed off the
                 // closed-form branch.
                 length *= 1.25;
+            } else {
+                // The corrector overwrote `arc_dxf`: back to the direction at `x_a`.
+                ws.arc_dxf.copy_from_slice(&ws.arc_pred);
             }
             corrected.is_some()
         };
-        // The next predictor's direction: the corrector's last `K^-1 f`, at an iterate
-        // within the tolerance of the new point (saves its factorization); after a
-        // failure, the one at `x_a` the failed predictor started from.
+        // The next predictor's direction: after a converged point, the corrector's last
+        // `K^-1 f`, at an iterate within the tolerance of the new point (saves its
+        // factorization); after a failed corrector or landing, the one at `x_a` (a landing
+        // leaves `arc_dxf` alone).
         direction_ready = true;
         if converged {
             cuts = 0;
         } else {
-            ws.arc_dxf.copy_from_slice(&ws.arc_pred);
             trial.unknowns.copy_from_slice(&ws.arc_xa);
             length *= 0.5;
             cuts += 1;
