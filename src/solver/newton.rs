@@ -619,60 +619,53 @@ pub fn solve_increment(
             target[2] - trial.strain[2],
         ];
         let from = trial.strain;
-        let (evaluated, tangent_predicted) = predict(
-            problem,
-            (!hard).then_some(&committed.sensitivity),
-            &mut trial.unknowns,
-            &from,
-            &step_strain,
-            &target,
-            ws,
-        );
-        // 1. Plain Newton.
-        let mut outcome = newton(
-            disc,
-            linear,
-            settings,
-            &target,
-            &mut trial.unknowns,
-            ws,
-            if depth == 0 {
-                Mode::NewtonUntilStagnant
-            } else {
-                Mode::Newton
-            },
-            evaluated,
-        );
-        // 1b. Near a limit point the tangent predictor can overshoot into the basin of
-        // another equilibrium; plain Newton then starts again from the elastic predictor.
-        // (Retrying after chord corrections alone changed none of the outcomes on the 22
-        // paths of the README's robustness sample and cost 40 iterations at the snap.)
-        let retry = outcome.is_err() && tangent_predicted;
-        hard |= outcome.is_err();
-        let settings = if hard { &plain_settings } else { settings };
-        if retry {
-            restart(&mut report, trial, ws);
-            let (evaluated, _) = predict(
+        // The sub-step's predictor and Newton loop, from `trial` at `from` to `target`.
+        let predict_step = |sensitivity, trial: &mut State, ws: &mut Workspace| {
+            predict(
                 problem,
-                None,
+                sensitivity,
                 &mut trial.unknowns,
                 &from,
                 &step_strain,
                 &target,
                 ws,
-            );
-            outcome = newton(
+            )
+        };
+        let newton_step = |settings, trial: &mut State, ws: &mut Workspace, mode, evaluated| {
+            newton(
                 disc,
                 linear,
                 settings,
                 &target,
                 &mut trial.unknowns,
                 ws,
-                Mode::Newton,
+                mode,
                 evaluated,
-            );
+            )
+        };
+        let (evaluated, tangent_predicted) =
+            predict_step((!hard).then_some(&committed.sensitivity), trial, ws);
+        // 1. Plain Newton.
+        let first_mode = if depth == 0 {
+            Mode::NewtonUntilStagnant
+        } else {
+            Mode::Newton
+        };
+        let mut outcome = newton_step(settings, trial, ws, first_mode, evaluated);
+        // 1b. Near a limit point the tangent predictor can overshoot into the basin of
+        // another equilibrium; plain Newton then starts again from the elastic predictor.
+        // (Retrying after chord corrections alone changed none of the outcomes on an
+        // earlier 22-path robustness sample and cost 40 iterations at the snap.)
+        let retry = outcome.is_err() && tangent_predicted;
+        hard |= outcome.is_err();
+        let settings = if hard { &plain_settings } else { settings };
+        if retry {
+            restart(&mut report, trial, ws);
+            let (evaluated, _) = predict_step(None, trial, ws);
+            outcome = newton_step(settings, trial, ws, Mode::Newton, evaluated);
         }
-        // 2. Path following through a limit point, then Newton from the last arc point.
+        // 2. Path following through a limit point, landing on the target (see
+        // `arclength`).
         if outcome.is_err() && settings.path_following {
             restart(&mut report, trial, ws);
             let reference = reference(disc, &target);
@@ -694,16 +687,7 @@ pub fn solve_increment(
         if outcome.is_err() && settings.max_secant_iterations > 0 {
             restart(&mut report, trial, ws);
             ws.hist_base.copy_from_slice(&trial.history);
-            outcome = newton(
-                disc,
-                linear,
-                settings,
-                &target,
-                &mut trial.unknowns,
-                ws,
-                Mode::SecantThenNewton,
-                false,
-            );
+            outcome = newton_step(settings, trial, ws, Mode::SecantThenNewton, false);
         }
         match outcome {
             Ok(iterations) => {
