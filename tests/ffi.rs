@@ -275,12 +275,28 @@ fn sensitivity_bytes(n: usize) -> usize {
     1 + 8 + 4 * (3 * n).div_ceil(rve::state::SENSITIVITY_BLOCK) + 8 + 3 * n
 }
 
+/// Bytes of format 5's path curvature for `n` unknowns: the valid flag, the step (3 f64),
+/// then, each after its u64 length, the block scales and the n i8 values (both empty
+/// until an increment filled them).
+fn curvature_bytes(n: usize, filled: bool) -> usize {
+    let (scales, values) = if filled {
+        (n.div_ceil(rve::state::SENSITIVITY_BLOCK), n)
+    } else {
+        (0, 0)
+    };
+    1 + 24 + 8 + 4 * scales + 8 + values
+}
+
 #[test]
 fn state_bytes_round_trip_and_refuse_foreign_states() {
     let h = init_paper();
-    let (s, _, _) = update(h, [1.5e-4, 0.0, 0.0]);
-    assert_eq!(s, OK);
-    assert_eq!(rve_commit(h), OK);
+    // Two increments: the second starts from the tangent predictor and fills the path
+    // curvature, so every part of the state is in the bytes.
+    for eps in [1.4e-4, 1.5e-4] {
+        let (s, _, _) = update(h, [eps, 0.0, 0.0]);
+        assert_eq!(s, OK);
+        assert_eq!(rve_commit(h), OK);
+    }
     let mut size = 0;
     assert_eq!(unsafe { rve_state_size(h, &mut size) }, OK);
     let mut small = vec![0u8; 10];
@@ -308,18 +324,22 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     assert_eq!(load(&[1, 2, 3]), RveStatus::BadState as u32);
     assert_eq!(load(&[0u8; 100]), RveStatus::BadState as u32);
     assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
-    for unknown_version in [0u8, 5] {
+    for unknown_version in [0u8, 6] {
         let mut other_version = bytes.clone();
         other_version[8] = unknown_version;
         assert_eq!(load(&other_version), RveStatus::StateVersion as u32);
     }
     // A negative delta_max is refused, and the instance keeps its state.
-    // The payload ends with the history and then the sensitivity (bincode: a bool, three
-    // block scales with their length, 3n i8 values with theirs: filled by the committed
-    // update with tangent).
+    // The payload ends with the history, the sensitivity and the path curvature, both
+    // filled by the committed updates with tangent.
     let mut negative = bytes.clone();
     let n = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
-    let last = negative.len() - sensitivity_bytes(n) - 8;
+    let curvature_at = negative.len() - curvature_bytes(n, true);
+    assert_eq!(
+        bytes[curvature_at], 1,
+        "the path curvature is filled and valid"
+    );
+    let last = curvature_at - sensitivity_bytes(n) - 8;
     negative[last..last + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
     assert_eq!(load(&negative), RveStatus::BadState as u32);
     let (_, sig_c, _) = update(h2, next);
@@ -484,7 +504,8 @@ fn one_instance_from_two_threads_is_busy_or_fine_never_corrupt() {
 /// update to `[1.5e-4, 0, 0]` (made by `scripts/make_state_format1.sh`, kept for this
 /// test). This library reads it, and the restarted instance continues like one that
 /// computed the same state itself, to the Newton tolerance (see below). Format 2 (no
-/// sensitivity) and format 3 (a 16-bit sensitivity, dropped on loading) states load too.
+/// sensitivity), format 3 (a 16-bit sensitivity, dropped on loading) and format 4 (no
+/// path curvature) states load too.
 #[test]
 fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
     let bytes = std::fs::read(common::repo("tests/data/state_format1_paper_rve.bin")).unwrap();
@@ -517,7 +538,8 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         "{sig_old:?} vs {sig_new:?}"
     );
     assert!(rel(&d_old, &d_new) <= 1e-6, "{d_old:?} vs {d_new:?}");
-    // Saved again, it is the current format (4) with the sensitivity, and loads back.
+    // Saved again, it is the current format (5) with the sensitivity (the increment from
+    // the elastic predictor left the path curvature empty), and loads back.
     let mut size = 0;
     assert_eq!(rve_commit(old), OK);
     assert_eq!(unsafe { rve_state_size(old, &mut size) }, OK);
@@ -527,12 +549,12 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         unsafe { rve_state_save(old, saved.as_mut_ptr(), size, &mut written) },
         OK
     );
-    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 4);
+    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 5);
     assert_eq!(
         unsafe { rve_state_load(fresh, saved.as_ptr(), written) },
         OK
     );
-    // Format 2: the same payload without the trailing sensitivity.
+    // Format 4: the same payload without the trailing path curvature.
     let n = u64::from_le_bytes(saved[16..24].try_into().unwrap()) as usize;
     let with_version = |mut bytes: Vec<u8>, version: u32| {
         bytes[8..12].copy_from_slice(&version.to_le_bytes());
@@ -540,7 +562,10 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         bytes[32..40].copy_from_slice(&payload.to_le_bytes());
         bytes
     };
-    let format2 = with_version(saved[..written - sensitivity_bytes(n)].to_vec(), 2);
+    let format4_len = written - curvature_bytes(n, false);
+    let format4 = with_version(saved[..format4_len].to_vec(), 4);
+    // Format 2: without the sensitivity either.
+    let format2 = with_version(saved[..format4_len - sensitivity_bytes(n)].to_vec(), 2);
     // Format 3: format 2 plus a 16-bit sensitivity (here a valid one of zeros).
     let mut format3 = format2.clone();
     format3.push(1);
@@ -548,7 +573,16 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
     format3.extend_from_slice(&(3 * n as u64).to_le_bytes());
     format3.extend(std::iter::repeat_n(0u8, 6 * n));
     let format3 = with_version(format3, 3);
-    let (_, sig_old, _) = update(old, [1.7e-4, 0.0, 0.0]);
+    let (_, sig_old, d_old) = update(old, [1.7e-4, 0.0, 0.0]);
+    // Format 4 keeps the sensitivity: the state is the one `old` has, bit for bit.
+    assert_eq!(
+        unsafe { rve_state_load(fresh, format4.as_ptr(), format4.len()) },
+        OK
+    );
+    let (s, sig, d) = update(fresh, [1.7e-4, 0.0, 0.0]);
+    assert_eq!(s, OK);
+    assert_eq!(sig.map(f64::to_bits), sig_old.map(f64::to_bits));
+    assert_eq!(d.map(f64::to_bits), d_old.map(f64::to_bits));
     for bytes in [format2, format3] {
         assert_eq!(
             unsafe { rve_state_load(fresh, bytes.as_ptr(), bytes.len()) },

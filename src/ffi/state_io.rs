@@ -20,18 +20,19 @@
 //! | 1 | 0.1.0 | `[delta_max, t_max]` per point (read, `t_max` dropped) |
 //! | 2 | main after 0.1.0 | `delta_max` per point (read, no sensitivity: the next increment starts from the elastic predictor) |
 //! | 3 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 16-bit (read, sensitivity dropped: the next increment starts from the elastic predictor) |
-//! | 4 | main after 0.1.0 | format 2 plus the sensitivity's 8-bit deviation from the model's elastic one, empty until filled ([`crate::state::Sensitivity`]) (written) |
+//! | 4 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 8-bit by blocks, empty until filled ([`crate::state::Sensitivity`]) (read, kept) |
+//! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`crate::state::PathCurvature`]) (written) |
 
 use super::boundary::{Failure, FfiResult};
 use super::status::RveStatus;
 use crate::model::Model;
-use crate::state::{State, StateFormat1, StateFormat2, StateFormat3, SENSITIVITY_BLOCK};
+use crate::state::{State, StateFormat1, StateFormat2, StateFormat3, StateFormat4};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 4;
+pub const STATE_FORMAT_VERSION: u32 = 5;
 /// Older formats this library still reads.
-const READABLE_OLD_FORMATS: [u32; 3] = [1, 2, 3];
+const READABLE_OLD_FORMATS: [u32; 4] = [1, 2, 3, 4];
 const HEADER: usize = 40;
 
 fn sizes(model: &Model) -> (u64, u64) {
@@ -118,15 +119,21 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
         bincode::deserialize::<StateFormat3>(payload)
             .map_err(|e| bad(&e.to_string()))?
             .into()
+    } else if version == 4 {
+        bincode::deserialize::<StateFormat4>(payload)
+            .map_err(|e| bad(&e.to_string()))?
+            .into()
     } else {
         bincode::deserialize(payload).map_err(|e| bad(&e.to_string()))?
     };
+    // A valid sensitivity or curvature must have its buffers; empty ones are fine.
+    let filled_if_valid = |valid: bool, values: &[i8]| !valid || !values.is_empty();
     if state.unknowns.len() as u64 != n
         || state.history.len() as u64 != nh
-        || !(state.sensitivity.values.is_empty() && !state.sensitivity.valid
-            || state.sensitivity.values.len() as u64 == 3 * n
-                && state.sensitivity.scales.len()
-                    == state.sensitivity.values.len().div_ceil(SENSITIVITY_BLOCK))
+        || !state.sensitivity.data.is_consistent(3 * n as usize)
+        || !filled_if_valid(state.sensitivity.valid, &state.sensitivity.data.values)
+        || !state.curvature.data.is_consistent(n as usize)
+        || !filled_if_valid(state.curvature.valid, &state.curvature.data.values)
     {
         return Err(bad("payload sizes disagree with the header"));
     }
@@ -134,8 +141,8 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
         .strain
         .iter()
         .chain(&state.unknowns)
+        .chain(&state.curvature.step)
         .any(|v| !v.is_finite())
-        || state.sensitivity.scales.iter().any(|v| !v.is_finite())
     {
         return Err(bad("non-finite values"));
     }

@@ -344,6 +344,12 @@ pub struct SolverSpec {
     /// plain Newton with its quadratic rate.
     #[serde(default = "yes")]
     pub reuse_factorization: bool,
+    /// Second-order predictor: an increment that keeps the direction of the previous one
+    /// starts from `x_n + X_n Delta eps + s^2 e_n`, with the previous increment's
+    /// prediction error `e_n` kept in the state (see `state::PathCurvature`); `false`
+    /// predicts to first order only (`x_n + X_n Delta eps`) and keeps no curvature.
+    #[serde(default = "yes")]
+    pub second_order_predictor: bool,
 }
 
 impl Default for SolverSpec {
@@ -356,6 +362,7 @@ impl Default for SolverSpec {
             path_following: true,
             max_secant_iterations: default_secant_iterations(),
             reuse_factorization: true,
+            second_order_predictor: true,
         }
     }
 }

@@ -19,57 +19,37 @@ pub struct State {
     /// Fluctuation sensitivity `X = dx/d eps = -K^-1 G` at this state, kept to predict
     /// the next increment (see [`Sensitivity`]).
     pub sensitivity: Sensitivity,
+    /// The second-order term of the fluctuation path, from the increment that led here
+    /// (see [`PathCurvature`]).
+    pub curvature: PathCurvature,
 }
 
-/// The sensitivity `X = -K^-1 G` (n x 3, column-major) of a converged state, stored in
-/// 8-bit fixed point by blocks: block `b` of [`SENSITIVITY_BLOCK`] consecutive values holds
-/// `round(127 X_i / scale_b)` with `scale_b = max |X_i|` over the block (f32). It only
-/// seeds the next increment's Newton loop (`x_0 = x_n + X_n Delta eps`, a first-order
-/// predictor), where a relative error of 0.4 % of the block's largest entry is of the
-/// order of the predictor's own `O(Delta eps^2)` error: on the paper path every increment
-/// takes the iterations and factorizations it took with the 16-bit, per-column `X` of
-/// format 3, and on the section 5.2.2 cycle one increment takes one more iteration (not
-/// one more factorization). Blocks matter after the peak, where the largest entries sit at
-/// the crack: one scale per column made the post-snap increment of the cycle take 7
-/// iterations instead of 2. It costs 3.1 bytes per unknown instead of 24 (6 in format 3),
-/// and nothing until a converged update with a tangent has filled it (`valid` false, no
-/// buffers: the virgin state uses the model's elastic predictor). An update without
-/// tangent keeps the one of the state it started from, which the predictor's residual
-/// check then guards like any other prediction.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Sensitivity {
-    pub valid: bool,
-    /// One scale per block of [`SENSITIVITY_BLOCK`] values: the block's largest `|X|`.
+/// Values per quantization block of a [`Quantized`] vector.
+pub const SENSITIVITY_BLOCK: usize = 32;
+
+/// A vector stored in 8-bit fixed point by blocks: block `b` of [`SENSITIVITY_BLOCK`]
+/// consecutive values holds `round(127 v_i / scale_b)` with `scale_b = max |v_i|` over the
+/// block (f32, rounded up so that `|v_i| / scale_b <= 1`). The error of a value is at most
+/// half a step, `scale_b / 254`. Empty until first stored.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Quantized {
     pub scales: Vec<f32>,
     pub values: Vec<i8>,
 }
 
-/// Values per quantization block of a [`Sensitivity`].
-pub const SENSITIVITY_BLOCK: usize = 32;
-
-impl Sensitivity {
-    fn empty() -> Self {
-        Sensitivity {
-            valid: false,
-            scales: Vec::new(),
-            values: Vec::new(),
+impl Quantized {
+    /// Stores `sign * src`; allocates the buffers the first time only. Returns false (and
+    /// stores nothing) if a value is not finite.
+    fn store(&mut self, src: &[f64], sign: f64) -> bool {
+        if src.iter().any(|v| !v.is_finite()) {
+            return false;
         }
-    }
-
-    /// Stores `X = -kg` (`kg = K^-1 G`, n x 3 column-major). Allocates the buffers the
-    /// first time only.
-    pub fn store_negated(&mut self, kg: &[f64]) {
-        if kg.len() % 3 != 0 || kg.iter().any(|v| !v.is_finite()) {
-            self.valid = false;
-            return;
-        }
-        self.values.resize(kg.len(), 0);
+        self.values.resize(src.len(), 0);
         self.scales
-            .resize(kg.len().div_ceil(SENSITIVITY_BLOCK), 0.0);
+            .resize(src.len().div_ceil(SENSITIVITY_BLOCK), 0.0);
         for (b, scale_out) in self.scales.iter_mut().enumerate() {
-            let block = b * SENSITIVITY_BLOCK..((b + 1) * SENSITIVITY_BLOCK).min(kg.len());
-            // Rounded up to f32, so that |X| / scale <= 1 holds for every value.
-            let max = block.clone().fold(0.0f64, |m, i| m.max(kg[i].abs()));
+            let block = b * SENSITIVITY_BLOCK..((b + 1) * SENSITIVITY_BLOCK).min(src.len());
+            let max = block.clone().fold(0.0f64, |m, i| m.max(src[i].abs()));
             let scale = max as f32;
             let scale = if f64::from(scale) < max {
                 f32::from_bits(scale.to_bits() + 1)
@@ -78,40 +58,131 @@ impl Sensitivity {
             };
             *scale_out = scale;
             let factor = if scale > 0.0 {
-                127.0 / f64::from(scale)
+                sign * 127.0 / f64::from(scale)
             } else {
                 0.0
             };
             for i in block {
-                self.values[i] = (-kg[i] * factor).round() as i8;
-            }
-        }
-        self.valid = true;
-    }
-
-    /// `out = X d` (nothing if not valid; returns whether it wrote).
-    pub fn times(&self, d: &[f64; 3], out: &mut [f64]) -> bool {
-        let n = out.len();
-        if !self.valid || self.values.len() != 3 * n {
-            return false;
-        }
-        out.iter_mut().for_each(|o| *o = 0.0);
-        for (b, &scale) in self.scales.iter().enumerate() {
-            let step = f64::from(scale) / 127.0;
-            let block = b * SENSITIVITY_BLOCK..((b + 1) * SENSITIVITY_BLOCK).min(3 * n);
-            for i in block {
-                let (c, row) = (i / n, i % n);
-                out[row] += f64::from(self.values[i]) * step * d[c];
+                self.values[i] = (src[i] * factor).round() as i8;
             }
         }
         true
     }
 
-    /// Copies `other`; allocates only the first time `self` receives a filled one.
-    fn copy_from(&mut self, other: &Sensitivity) {
-        self.valid = other.valid;
+    /// Copies `other` into the buffers in place (a derived `clone_from` would allocate
+    /// new ones); allocates only when they are too short.
+    fn copy_from(&mut self, other: &Quantized) {
         self.scales.clone_from(&other.scales);
         self.values.clone_from(&other.values);
+    }
+
+    /// Calls `f(i, v_i)` for every stored value.
+    fn for_each(&self, mut f: impl FnMut(usize, f64)) {
+        for (b, &scale) in self.scales.iter().enumerate() {
+            let step = f64::from(scale) / 127.0;
+            let block = b * SENSITIVITY_BLOCK..((b + 1) * SENSITIVITY_BLOCK).min(self.values.len());
+            for i in block {
+                f(i, f64::from(self.values[i]) * step);
+            }
+        }
+    }
+
+    /// Whether the buffers hold `len` values (or nothing) with finite scales: what a
+    /// decoder checks.
+    pub fn is_consistent(&self, len: usize) -> bool {
+        let sized = self.values.is_empty() && self.scales.is_empty()
+            || self.values.len() == len && self.scales.len() == len.div_ceil(SENSITIVITY_BLOCK);
+        sized && self.scales.iter().all(|v| v.is_finite())
+    }
+
+    fn bytes(&self) -> usize {
+        self.values.capacity() * std::mem::size_of::<i8>()
+            + self.scales.capacity() * std::mem::size_of::<f32>()
+    }
+}
+
+/// The sensitivity `X = -K^-1 G` (n x 3, column-major) of a converged state, stored
+/// [`Quantized`]. It only seeds the next increment's Newton loop
+/// (`x_0 = x_n + X_n Delta eps`, a first-order predictor), where a relative error of
+/// 0.4 % of the block's largest entry is of the order of the predictor's own
+/// `O(Delta eps^2)` error: on the paper path every increment takes the iterations and
+/// factorizations it took with the 16-bit, per-column `X` of format 3, and on the section
+/// 5.2.2 cycle one increment takes one more iteration (not one more factorization).
+/// Blocks matter after the peak, where the largest entries sit at the crack: one scale per
+/// column made the post-snap increment of the cycle take 7 iterations instead of 2. It
+/// costs 3.1 bytes per unknown instead of 24 (6 in format 3), and nothing until a
+/// converged update with a tangent has filled it (`valid` false, no buffers: the virgin
+/// state uses the model's elastic predictor). An update without tangent keeps the one of
+/// the state it started from, which the predictor's residual check then guards like any
+/// other prediction. (Serialized exactly as format 4's flat `valid, scales, values`.)
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sensitivity {
+    pub valid: bool,
+    pub data: Quantized,
+}
+
+impl Sensitivity {
+    fn empty() -> Self {
+        Sensitivity {
+            valid: false,
+            data: Quantized::default(),
+        }
+    }
+
+    /// Stores `X = -kg` (`kg = K^-1 G`, n x 3 column-major); not valid if `kg` is not.
+    pub fn store_negated(&mut self, kg: &[f64]) {
+        self.valid = kg.len() % 3 == 0 && self.data.store(kg, -1.0);
+    }
+
+    /// `out = X d` (nothing if not valid; returns whether it wrote).
+    pub fn times(&self, d: &[f64; 3], out: &mut [f64]) -> bool {
+        let n = out.len();
+        if !self.valid || self.data.values.len() != 3 * n {
+            return false;
+        }
+        out.iter_mut().for_each(|o| *o = 0.0);
+        self.data.for_each(|i, v| out[i % n] += v * d[i / n]);
+        true
+    }
+}
+
+/// The error of the last increment's first-order prediction,
+/// `e = x_{n} - x_{n-1} - X_{n-1} Delta eps_{n-1}`, and that increment's strain step: the
+/// second-order term `x''[Delta eps, Delta eps] / 2` of the fluctuation path `x(eps)` (the
+/// first-order one is the sensitivity's). On a path whose next step `Delta eps = s Delta
+/// eps_{n-1}` keeps the direction, `x_{n+1} ~ x_n + X_n Delta eps + s^2 e` predicts to
+/// third order (see `solver::newton`'s module docs). Kept only after an increment that
+/// started from the tangent predictor and converged in one Newton loop (`valid` false
+/// otherwise), stored [`Quantized`] (1.1 bytes per unknown), allocated by the first
+/// increment that fills it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PathCurvature {
+    pub valid: bool,
+    pub step: [f64; 3],
+    pub data: Quantized,
+}
+
+impl PathCurvature {
+    fn empty() -> Self {
+        PathCurvature {
+            valid: false,
+            step: [0.0; 3],
+            data: Quantized::default(),
+        }
+    }
+
+    /// Stores the prediction error `error` of a step `step`; not valid if `error` is not
+    /// finite.
+    pub fn store(&mut self, error: &[f64], step: [f64; 3]) {
+        self.valid = self.data.store(error, 1.0);
+        self.step = step;
+    }
+
+    /// `out += s^2 e` for a step `s` times the stored one.
+    pub fn add_scaled(&self, s: f64, out: &mut [f64]) {
+        if self.valid && self.data.values.len() == out.len() {
+            self.data.for_each(|i, v| out[i] += s * s * v);
+        }
     }
 }
 
@@ -123,16 +194,21 @@ impl State {
             unknowns: vec![0.0; n_unknowns],
             history: vec![CohesiveHistory::default(); n_history],
             sensitivity: Sensitivity::empty(),
+            curvature: PathCurvature::empty(),
         }
     }
 
     /// Copies `other` into `self` without reallocating (sizes must match), but for the
-    /// sensitivity's buffer the first time it arrives.
+    /// quantized buffers the first time they arrive.
     pub fn copy_from(&mut self, other: &State) {
         self.strain = other.strain;
         self.unknowns.copy_from_slice(&other.unknowns);
         self.history.copy_from_slice(&other.history);
-        self.sensitivity.copy_from(&other.sensitivity);
+        self.sensitivity.valid = other.sensitivity.valid;
+        self.sensitivity.data.copy_from(&other.sensitivity.data);
+        self.curvature.valid = other.curvature.valid;
+        self.curvature.step = other.curvature.step;
+        self.curvature.data.copy_from(&other.curvature.data);
     }
 
     /// Heap and inline bytes of this state.
@@ -140,8 +216,8 @@ impl State {
         std::mem::size_of::<Self>()
             + self.unknowns.capacity() * std::mem::size_of::<f64>()
             + self.history.capacity() * std::mem::size_of::<CohesiveHistory>()
-            + self.sensitivity.values.capacity() * std::mem::size_of::<i8>()
-            + self.sensitivity.scales.capacity() * std::mem::size_of::<f32>()
+            + self.sensitivity.data.bytes()
+            + self.curvature.data.bytes()
     }
 }
 
@@ -180,6 +256,7 @@ impl From<StateFormat1> for State {
         State {
             strain: old.strain,
             sensitivity: Sensitivity::empty(),
+            curvature: PathCurvature::empty(),
             unknowns: old.unknowns,
             history: old
                 .history
@@ -205,6 +282,7 @@ impl From<StateFormat2> for State {
         State {
             strain: old.strain,
             sensitivity: Sensitivity::empty(),
+            curvature: PathCurvature::empty(),
             unknowns: old.unknowns,
             history: old.history,
         }
@@ -241,6 +319,30 @@ impl From<StateFormat3> for State {
     }
 }
 
+/// The state as format 4 of the state bytes stored it: format 2 plus the 8-bit
+/// [`Sensitivity`] (kept), without the path curvature (the first increment after loading
+/// predicts to first order).
+#[derive(Deserialize)]
+pub struct StateFormat4 {
+    pub strain: [f64; 3],
+    pub unknowns: Vec<f64>,
+    #[serde(with = "history_serde")]
+    pub history: Vec<CohesiveHistory>,
+    pub sensitivity: Sensitivity,
+}
+
+impl From<StateFormat4> for State {
+    fn from(old: StateFormat4) -> Self {
+        State {
+            strain: old.strain,
+            unknowns: old.unknowns,
+            history: old.history,
+            sensitivity: old.sensitivity,
+            curvature: PathCurvature::empty(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,12 +356,12 @@ mod tests {
             .map(|i| ((i * 7919) % 101) as f64 * 1e-3 - 0.05 * (i / n) as f64)
             .collect();
         let mut s = State::virgin(n, 0).sensitivity;
-        assert!(!s.valid && s.values.is_empty() && s.scales.is_empty());
+        assert!(!s.valid && s.data.values.is_empty() && s.data.scales.is_empty());
         let mut out = vec![0.0; n];
         assert!(!s.times(&[1.0, 0.0, 0.0], &mut out));
         s.store_negated(&kg);
         assert!(s.valid);
-        assert_eq!(s.scales.len(), (3 * n).div_ceil(SENSITIVITY_BLOCK));
+        assert_eq!(s.data.scales.len(), (3 * n).div_ceil(SENSITIVITY_BLOCK));
         for c in 0..3 {
             let mut d = [0.0; 3];
             d[c] = 1.0;
@@ -276,5 +378,35 @@ mod tests {
         bad[3] = f64::NAN;
         s.store_negated(&bad);
         assert!(!s.valid);
+    }
+
+    /// The path curvature adds `s^2 e` to within half a quantization step (times `s^2`),
+    /// is not valid before it is stored, and refuses non-finite input.
+    #[test]
+    fn curvature_adds_the_scaled_second_order_term() {
+        let n = 70;
+        let e: Vec<f64> = (0..n)
+            .map(|i| ((i * 31) % 17) as f64 * 1e-6 - 8e-6)
+            .collect();
+        let mut c = State::virgin(n, 0).curvature;
+        let mut out = vec![1.0; n];
+        c.add_scaled(2.0, &mut out);
+        assert!(
+            out.iter().all(|&v| v == 1.0),
+            "an empty curvature adds nothing"
+        );
+        c.store(&e, [1e-5, 0.0, 0.0]);
+        assert!(c.valid && c.data.is_consistent(n) && c.step == [1e-5, 0.0, 0.0]);
+        c.add_scaled(2.0, &mut out);
+        for (i, o) in out.iter().enumerate() {
+            let b = i / SENSITIVITY_BLOCK;
+            let block = b * SENSITIVITY_BLOCK..((b + 1) * SENSITIVITY_BLOCK).min(n);
+            let max = block.fold(0.0f64, |m, j| m.max(e[j].abs()));
+            assert!((o - 1.0 - 4.0 * e[i]).abs() <= 4.0 * 0.5 / 127.0 * max * (1.0 + 1e-6));
+        }
+        let mut bad = e.clone();
+        bad[5] = f64::INFINITY;
+        c.store(&bad, [1e-5, 0.0, 0.0]);
+        assert!(!c.valid);
     }
 }

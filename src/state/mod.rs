@@ -4,6 +4,7 @@ mod instance_state;
 mod workspace;
 
 pub use instance_state::{
-    Sensitivity, State, StateFormat1, StateFormat2, StateFormat3, SENSITIVITY_BLOCK,
+    PathCurvature, Quantized, Sensitivity, State, StateFormat1, StateFormat2, StateFormat3,
+    StateFormat4, SENSITIVITY_BLOCK,
 };
 pub use workspace::Workspace;

@@ -24,6 +24,9 @@ pub struct Workspace {
     pub x_try: Vec<f64>,
     pub r_try: Vec<f64>,
     pub k_try: Vec<f64>,
+    /// `X_n Delta eps`, the first-order part of the tangent prediction (see
+    /// [`crate::state::PathCurvature`]).
+    pub tangent_prediction: Vec<f64>,
     /// `K^-1 G` (n x 3, column-major) and its refinement residual.
     pub kg: Vec<f64>,
     /// True when `kg` is `K_f^-1 G` for the factorization in `factor`, solved with the
@@ -81,6 +84,7 @@ impl Workspace {
             x_try: vec![0.0; n],
             r_try: vec![0.0; n],
             k_try: vec![0.0; nnz],
+            tangent_prediction: vec![0.0; n],
             kg: vec![0.0; 3 * n],
             kg_of_factor: false,
             rhs4: vec![0.0; 4 * n],
