@@ -4,13 +4,18 @@
 //! the section 5.2.1 path (`eps_xx` to 2.2e-4 in 20 increments; the mean carries the
 //! post-peak increments), the iterations per increment, the median numeric factorization
 //! of the converged tangent as the solver does it (LL^T, a checked LBL^T when that fails,
-//! LU last) with the share of each kind, and LU alone for comparison, the 1-RHS solve time, the
-//! bytes of one instance's state, and two ratios per increment (medians):
-//! - `update time / (iterations x factorization + solve)`, the definition, which
-//!   assumes one factorization per Newton iteration;
-//! - `update time / (factorizations x factorization + iterations x solve)`, the
-//!   factorizations actually done (Newton, chord corrections reuse one, the tangent may
-//!   add one): how much an update costs beyond the linear algebra it did.
+//! LU last) with the share of each kind, and LU alone for comparison, the solve times with
+//! 1, 3 and 4 right-hand sides (the widths the solver uses: a chord correction, the
+//! tangent's sweep, a Newton correction with the tangent's columns), the bytes of one
+//! instance's state, and two ratios per increment (medians):
+//! - `update time / (iterations x factorization + solves)`, the definition, which
+//!   assumes one factorization per Newton iteration; `solves` is the time of the solves
+//!   the update did (counted by width by the solver, `NumericFactor::solves`, and priced
+//!   at the widths' times), since an update solves for the tangent's columns too. With
+//!   one 1-column solve instead, a one-iteration update of the paper RVE would read 2.0;
+//! - `update time / (factorizations x factorization + solves)`, the factorizations
+//!   actually done (chord corrections reuse one, the tangent may add one): how much an
+//!   update costs beyond the linear algebra it did.
 //!
 //! Timing tests do not belong in the test suite (noisy machines); this is the place.
 
@@ -20,6 +25,9 @@ use std::time::Instant;
 use faer::dyn_stack::MemStack;
 use rve::solver::FactorKind;
 use rve::{Instance, Model, Scene, TangentRequest};
+
+/// Right-hand-side counts the solver's solves use, timed one by one.
+const SOLVE_WIDTHS: [usize; 3] = [1, 3, 4];
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -38,7 +46,8 @@ struct Row {
     cholesky_share: f64,
     lblt_share: f64,
     mean_increment_ms: f64,
-    solve_ms: f64,
+    solve_ms: [f64; 3],
+    solve_columns: f64,
     state_bytes: usize,
     ratio: f64,
     factorizations: f64,
@@ -57,7 +66,8 @@ fn bench(path: &str) -> Row {
     let mut factorizations = Vec::new();
     let mut overheads = Vec::new();
     let mut factor_times = Vec::new();
-    let mut solve_times = Vec::new();
+    let mut solve_times: [Vec<f64>; 3] = Default::default();
+    let mut solve_columns = Vec::new();
     let mut max_iterations = 0;
     let mut lu_times = Vec::new();
     let mut cholesky_count = 0usize;
@@ -69,14 +79,19 @@ fn bench(path: &str) -> Row {
         let mut inst = Instance::new(model.clone());
         for k in 1..=steps {
             let eps = [2.2e-4 * k as f64 / steps as f64, 0.0, 0.0];
+            let solves_before = ws.factor.solves;
             let t0 = Instant::now();
             let r = inst
                 .update(eps, &mut ws, TangentRequest::Consistent)
                 .expect("update");
             let dt = t0.elapsed().as_secs_f64();
             inst.commit().expect("commit");
-            // Factorization and solve of the converged tangent, timed on their own.
-            let (mut ft, mut st, mut lt) = (Vec::new(), Vec::new(), Vec::new());
+            let solves: Vec<f64> = (0..5)
+                .map(|w| (ws.factor.solves[w] - solves_before[w]) as f64)
+                .collect();
+            // Factorization and solves of the converged tangent, timed on their own.
+            let (mut ft, mut lt) = (Vec::new(), Vec::new());
+            let mut st: [Vec<f64>; 3] = Default::default();
             for _ in 0..5 {
                 let t = Instant::now();
                 let kind = model
@@ -95,15 +110,20 @@ fn bench(path: &str) -> Row {
                     FactorKind::Lblt => lblt_count += 1,
                     FactorKind::Lu => {}
                 }
-                ws.dx.copy_from_slice(&ws.r);
-                let t = Instant::now();
-                model.linear.solve_in_place(
-                    &ws.factor,
-                    &mut ws.dx,
-                    1,
-                    MemStack::new(&mut ws.stack),
-                );
-                st.push(t.elapsed().as_secs_f64());
+                let n = model.disc.n();
+                for (times, width) in st.iter_mut().zip(SOLVE_WIDTHS) {
+                    let rhs = &mut ws.rhs4[..width * n];
+                    rhs[..n].copy_from_slice(&ws.r);
+                    rhs[n..].copy_from_slice(&model.disc.g[..(width - 1) * n]);
+                    let t = Instant::now();
+                    model.linear.solve_in_place(
+                        &mut ws.factor,
+                        rhs,
+                        width,
+                        MemStack::new(&mut ws.stack),
+                    );
+                    times.push(t.elapsed().as_secs_f64());
+                }
                 let t = Instant::now();
                 model
                     .linear
@@ -117,18 +137,25 @@ fn bench(path: &str) -> Row {
                     .expect("lu");
                 lt.push(t.elapsed().as_secs_f64());
             }
-            let (f, s) = (median(&mut ft), median(&mut st));
+            let f = median(&mut ft);
+            let width_times = st.each_mut().map(|t| median(t));
+            // The update's solves priced by width (the solver has no 2-column solve).
+            assert_eq!(solves[2], 0.0, "a 2-column solve: time that width too");
+            let solve_time = solves[1] * width_times[0]
+                + solves[3] * width_times[1]
+                + solves[4] * width_times[2];
             factor_times.push(f);
-            solve_times.push(s);
+            for (all, t) in solve_times.iter_mut().zip(width_times) {
+                all.push(t);
+            }
+            solve_columns.push((1..5).map(|w| w as f64 * solves[w]).sum::<f64>());
             lu_times.push(median(&mut lt));
             times.push(dt);
             iterations.push(r.report.iterations as f64);
             max_iterations = max_iterations.max(r.report.iterations);
-            ratios.push(dt / (r.report.iterations.max(1) as f64 * f + s));
+            ratios.push(dt / (r.report.iterations.max(1) as f64 * f + solve_time));
             factorizations.push(r.report.factorizations as f64);
-            overheads.push(
-                dt / (r.report.factorizations as f64 * f + r.report.iterations.max(1) as f64 * s),
-            );
+            overheads.push(dt / (r.report.factorizations as f64 * f + solve_time));
         }
     }
     // A converged state with its sensitivity and path curvature (a virgin state has
@@ -152,7 +179,8 @@ fn bench(path: &str) -> Row {
         lblt_share: lblt_count as f64 / (5 * factor_times.len()) as f64,
         factor_ms: 1e3 * median(&mut factor_times),
         lu_ms: 1e3 * median(&mut lu_times),
-        solve_ms: 1e3 * median(&mut solve_times),
+        solve_ms: solve_times.each_mut().map(|t| 1e3 * median(t)),
+        solve_columns: median(&mut solve_columns),
         state_bytes: inst.committed().bytes(),
         ratio: median(&mut ratios),
         mean_factorizations: factorizations.iter().sum::<f64>() / factorizations.len() as f64,
@@ -168,13 +196,13 @@ fn main() {
         format!("{root}/scenes/paper_rve_fine.toml"),
     ];
     println!(
-        "| scene | unknowns | ITZ | median increment (ms) | mean increment (ms) | iterations (median / max) | factorizations (median / mean) | factorization used (ms) | LL^T / LBL^T share | LU alone (ms) | solve (ms) | state bytes | update / (it x fact + solve) | update / (fact x factorizations + it x solve) |"
+        "| scene | unknowns | ITZ | median increment (ms) | mean increment (ms) | iterations (median / max) | factorizations (median / mean) | factorization used (ms) | LL^T / LBL^T share | LU alone (ms) | solve 1 / 3 / 4 columns (ms) | columns solved (median) | state bytes | update / (it x fact + solves) | update / (fact x factorizations + solves) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for s in &scenes {
         let r = bench(s);
         println!(
-            "| {} | {} | {} | {:.3} | {:.3} | {} / {} | {} / {:.2} | {:.3} | {:.0} % / {:.0} % | {:.3} | {:.3} | {} | {:.2} | {:.2} |",
+            "| {} | {} | {} | {:.3} | {:.3} | {} / {} | {} / {:.2} | {:.3} | {:.0} % / {:.0} % | {:.3} | {:.3} / {:.3} / {:.3} | {} | {} | {:.2} | {:.2} |",
             r.name,
             r.unknowns,
             r.itz,
@@ -188,7 +216,10 @@ fn main() {
             100.0 * r.cholesky_share,
             100.0 * r.lblt_share,
             r.lu_ms,
-            r.solve_ms,
+            r.solve_ms[0],
+            r.solve_ms[1],
+            r.solve_ms[2],
+            r.solve_columns,
             r.state_bytes,
             r.ratio,
             r.overhead

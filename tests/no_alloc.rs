@@ -97,7 +97,7 @@ fn checked_lblt_does_not_allocate() {
             .unwrap();
         model
             .linear
-            .solve_in_place(&ws.factor, rhs, 1, MemStack::new(&mut ws.stack));
+            .solve_in_place(&mut ws.factor, rhs, 1, MemStack::new(&mut ws.stack));
         kind
     };
     assert_eq!(run(&mut ws, &mut rhs), FactorKind::Lblt);

@@ -138,7 +138,12 @@ pub(super) fn trace(
                 .iter_mut()
                 .zip(&ws.arc_f)
                 .for_each(|(d, f)| *d = -f);
-            linear.solve_in_place(&ws.factor, &mut ws.arc_dxf, 1, MemStack::new(&mut ws.stack));
+            linear.solve_in_place(
+                &mut ws.factor,
+                &mut ws.arc_dxf,
+                1,
+                MemStack::new(&mut ws.stack),
+            );
         }
         let dxf_norm = dot(&ws.arc_dxf, &ws.arc_dxf).sqrt();
         if !(dxf_norm.is_finite() && dxf_norm > 0.0) {
@@ -268,12 +273,17 @@ fn correct(
         work.iterations += 1;
         // dx_R into ws.dx, dx_f into ws.arc_dxf (both with this factorization).
         ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
-        linear.solve_in_place(&ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
+        linear.solve_in_place(&mut ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
         ws.arc_dxf
             .iter_mut()
             .zip(&ws.arc_f)
             .for_each(|(d, f)| *d = -f);
-        linear.solve_in_place(&ws.factor, &mut ws.arc_dxf, 1, MemStack::new(&mut ws.stack));
+        linear.solve_in_place(
+            &mut ws.factor,
+            &mut ws.arc_dxf,
+            1,
+            MemStack::new(&mut ws.stack),
+        );
         // Riks' normal plane: ((x - x_a) + dx_R + dt dx_f) . p = length^2, with p the
         // predictor step: linear in dt, so always solvable (a circle may miss the
         // linearized path at a kink of the law).

@@ -86,6 +86,10 @@ pub struct NumericFactor {
     pub lu_count: u64,
     /// LBL^T factorizations accepted by the probe check so far.
     pub lblt_count: u64,
+    /// Solves done with these buffers so far, by number of right-hand sides
+    /// (`solves[k]`, k = 1..=4; wider solves count in `solves[4]`): the solve work of an
+    /// update, for `benches/solver.rs`'s cost model.
+    pub solves: [u64; 5],
 }
 
 /// Symbolic analyses of one pattern, shared by every instance of a model.
@@ -219,6 +223,7 @@ impl LinearSolver {
             count: 0,
             lu_count: 0,
             lblt_count: 0,
+            solves: [0; 5],
         }
     }
 
@@ -345,12 +350,15 @@ impl LinearSolver {
     /// last factorization. Does nothing if there is none (callers check `current`).
     pub fn solve_in_place(
         &self,
-        numeric: &NumericFactor,
+        numeric: &mut NumericFactor,
         rhs: &mut [f64],
         ncols: usize,
         stack: &mut MemStack,
     ) {
         let n = rhs.len() / ncols.max(1);
+        if numeric.current.is_some() {
+            numeric.solves[ncols.min(4)] += 1;
+        }
         let b = MatMut::from_column_major_slice_mut(rhs, n, ncols);
         match (numeric.current, &self.cholesky) {
             (Some(FactorKind::Cholesky), Some(c)) => LltRef::new(&c.symbolic, &numeric.l_values)
@@ -472,7 +480,7 @@ mod tests {
         let mut x = vec![0.0; n];
         add_product(a, 1.0, &exact, &mut x);
         f.linear
-            .solve_in_place(&f.numeric, &mut x, 1, MemStack::new(&mut f.stack));
+            .solve_in_place(&mut f.numeric, &mut x, 1, MemStack::new(&mut f.stack));
         let err: f64 = x.iter().zip(&exact).map(|(a, b)| (a - b) * (a - b)).sum();
         (f.kind, err.sqrt() / norm(&exact))
     }

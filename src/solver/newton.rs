@@ -351,13 +351,18 @@ pub(super) fn newton(
             let (first, rest) = ws.rhs4.split_at_mut(n);
             first.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
             rest.copy_from_slice(&disc.g);
-            linear.solve_in_place(&ws.factor, &mut ws.rhs4, 4, MemStack::new(&mut ws.stack));
+            linear.solve_in_place(
+                &mut ws.factor,
+                &mut ws.rhs4,
+                4,
+                MemStack::new(&mut ws.stack),
+            );
             ws.dx.copy_from_slice(&ws.rhs4[..n]);
             ws.kg.copy_from_slice(&ws.rhs4[n..]);
             ws.kg_of_factor = true;
         } else {
             ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
-            linear.solve_in_place(&ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
+            linear.solve_in_place(&mut ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
         }
         if ws.dx.iter().any(|d| !d.is_finite()) {
             return Err(Failure::Singular("non-finite Newton correction".into()));
@@ -909,7 +914,7 @@ fn condensed_tangent(
     if ws.factored {
         if !ws.kg_of_factor {
             ws.kg.copy_from_slice(&disc.g);
-            linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
+            linear.solve_in_place(&mut ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
         }
         if unchanged {
             return Ok(condensed(&ws.kg, None));
@@ -929,7 +934,12 @@ fn condensed_tangent(
             .max(f64::MIN_POSITIVE);
         for sweep in 1..=TANGENT_SWEEPS {
             // The correction K_f^-1 R_k, in place: `residual` rewrites `kg_res` next.
-            linear.solve_in_place(&ws.factor, &mut ws.kg_res, 3, MemStack::new(&mut ws.stack));
+            linear.solve_in_place(
+                &mut ws.factor,
+                &mut ws.kg_res,
+                3,
+                MemStack::new(&mut ws.stack),
+            );
             ws.kg.iter_mut().zip(&ws.kg_res).for_each(|(x, d)| *x += d);
             let new_norm = residual(ws);
             let now = condensed(&ws.kg, Some(&ws.kg_res));
@@ -964,6 +974,6 @@ fn condensed_tangent(
     ws.k_factored.copy_from_slice(&ws.k);
     ws.factored = true;
     ws.kg.copy_from_slice(&disc.g);
-    linear.solve_in_place(&ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
+    linear.solve_in_place(&mut ws.factor, &mut ws.kg, 3, MemStack::new(&mut ws.stack));
     Ok(condensed(&ws.kg, None))
 }
