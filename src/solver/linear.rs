@@ -110,7 +110,9 @@ impl Cholesky {
     fn supernodal(&self) -> &SymbolicSupernodalCholesky<usize> {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(s) => s,
-            SymbolicCholeskyRaw::Simplicial(_) => unreachable!("analysis forced supernodal"),
+            SymbolicCholeskyRaw::Simplicial(_) => {
+                unreachable!("LinearSolver::new refuses a simplicial analysis")
+            }
         }
     }
 }
@@ -186,6 +188,12 @@ impl LinearSolver {
                 },
             )
             .map_err(|e| Error::Mesh(format!("symbolic Cholesky analysis failed: {e:?}")))?;
+            // The numeric kernels called below are the supernodal ones.
+            if !matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
+                return Err(Error::Mesh(
+                    "symbolic Cholesky analysis is not supernodal".into(),
+                ));
+            }
             let identity: Vec<usize>;
             let inverse = match symbolic.perm() {
                 Some(perm) => perm.arrays().1,
