@@ -54,12 +54,6 @@ const MAX_CUTS: u32 = 8;
 /// of the step: one increment of the robustness sample spent 436 factorizations at such
 /// a corner before the secant iterations solved it.)
 const MIN_LENGTH: f64 = 1e-4;
-/// The path is also lost once the tracer has spent this many corrector and landing
-/// iterations: a trace that lands does so in few (12 to 79 on the shipped scenes' paths
-/// and the robustness sample's ellipse paths, 2 to 4 per arc point), one that is lost
-/// first crawls (127 to 340 iterations, 10 to 25 per point) before the other limits stop
-/// it, and the secant iterations or the bisection that follow are the remedy then.
-const MAX_TRACE_ITERATIONS: u32 = 150;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
@@ -231,9 +225,6 @@ pub(super) fn trace(
             if cuts > MAX_CUTS || length < MIN_LENGTH * first_length {
                 return false;
             }
-        }
-        if work.iterations > MAX_TRACE_ITERATIONS {
-            return false;
         }
     }
     false
