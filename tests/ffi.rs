@@ -526,13 +526,7 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
     // from the elastic predictor instead of the tangent one and converges to another
     // point within the Newton tolerance (1e-6 relative residual): stress and tangent agree
     // to that tolerance, not to round-off (measured: 1.4e-8 and 3.0e-8).
-    let rel = |a: &[f64], b: &[f64]| {
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        a.iter()
-            .zip(b)
-            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-            / scale
-    };
+    let rel = common::max_rel_diff;
     assert!(
         rel(&sig_old, &sig_new) <= 1e-6,
         "{sig_old:?} vs {sig_new:?}"

@@ -282,13 +282,7 @@ fn second_order_predictor_agrees_with_first_order_on_a_turning_path() {
             .collect::<Vec<_>>()
     };
     let (first, second) = (run(false), run(true));
-    let rel = |a: &[f64], b: &[f64]| {
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        a.iter()
-            .zip(b)
-            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-            / scale
-    };
+    let rel = common::max_rel_diff;
     let (mut worst_stress, mut worst_tangent) = (0.0f64, 0.0f64);
     for (k, (a, b)) in first.iter().zip(&second).enumerate() {
         let (ds, dt) = (rel(&b.0, &a.0), rel(&b.1, &a.1));

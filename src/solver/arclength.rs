@@ -64,6 +64,21 @@ const MIN_LENGTH: f64 = 1e-4;
 // different post-peak branches and the host's Newton cycled. Where an increment lands
 // matters more to a host than what it costs.
 
+/// `ws.arc_dxf = -K^-1 f` with the factorization in `ws.factor`: the direction of the
+/// equilibrium path per unit of the load parameter `t`.
+fn load_direction(linear: &LinearSolver, ws: &mut Workspace) {
+    ws.arc_dxf
+        .iter_mut()
+        .zip(&ws.arc_f)
+        .for_each(|(d, f)| *d = -f);
+    linear.solve_in_place(
+        &mut ws.factor,
+        &mut ws.arc_dxf,
+        1,
+        MemStack::new(&mut ws.stack),
+    );
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -143,16 +158,7 @@ pub(super) fn trace(
             if factorize_current(disc, linear, ws).is_err() {
                 return false;
             }
-            ws.arc_dxf
-                .iter_mut()
-                .zip(&ws.arc_f)
-                .for_each(|(d, f)| *d = -f);
-            linear.solve_in_place(
-                &mut ws.factor,
-                &mut ws.arc_dxf,
-                1,
-                MemStack::new(&mut ws.stack),
-            );
+            load_direction(linear, ws);
         }
         let dxf_norm = dot(&ws.arc_dxf, &ws.arc_dxf).sqrt();
         if !(dxf_norm.is_finite() && dxf_norm > 0.0) {
@@ -283,16 +289,7 @@ fn correct(
         // dx_R into ws.dx, dx_f into ws.arc_dxf (both with this factorization).
         ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
         linear.solve_in_place(&mut ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
-        ws.arc_dxf
-            .iter_mut()
-            .zip(&ws.arc_f)
-            .for_each(|(d, f)| *d = -f);
-        linear.solve_in_place(
-            &mut ws.factor,
-            &mut ws.arc_dxf,
-            1,
-            MemStack::new(&mut ws.stack),
-        );
+        load_direction(linear, ws);
         // Riks' normal plane: ((x - x_a) + dx_R + dt dx_f) . p = length^2, with p the
         // predictor step: linear in dt, so always solvable (a circle may miss the
         // linearized path at a kink of the law).

@@ -132,12 +132,8 @@ impl PermutedLower {
         let (col_ptr, row_idx) = (a.col_ptr(), a.row_idx());
         let mut entries = Vec::new();
         for j in 0..n {
-            for (k, &i) in row_idx
-                .iter()
-                .enumerate()
-                .take(col_ptr[j + 1])
-                .skip(col_ptr[j])
-            {
+            let column = col_ptr[j]..col_ptr[j + 1];
+            for (k, &i) in column.clone().zip(&row_idx[column]) {
                 if i >= j {
                     let (pi, pj) = (inverse[i], inverse[j]);
                     entries.push((pi.min(pj), pi.max(pj), k));

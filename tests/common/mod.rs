@@ -24,3 +24,12 @@ pub fn paper_scene_with(replacements: &[(&str, &str)]) -> String {
     }
     text
 }
+
+/// `max |a_i - b_i| / max |b_i|`: the relative difference of two stress or tangent arrays.
+pub fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
+}
