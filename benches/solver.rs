@@ -59,6 +59,10 @@ fn bench(path: &str) -> Row {
     let scene = Scene::from_file(path).expect("scene");
     let model = Arc::new(Model::from_scene(&scene).expect("model"));
     let mut ws = model.workspace();
+    // Buffers of the timed factorizations and solves, beside the workspace's own.
+    let mut numeric = model.linear.numeric();
+    let mut stack = faer::dyn_stack::MemBuffer::new(model.linear.scratch(4));
+    let mut rhs4 = vec![0.0; 4 * model.disc.n()];
     let steps = 20;
     let mut times = Vec::new();
     let mut iterations = Vec::new();
@@ -79,7 +83,7 @@ fn bench(path: &str) -> Row {
         let mut inst = Instance::new(model.clone());
         for k in 1..=steps {
             let eps = [2.2e-4 * k as f64 / steps as f64, 0.0, 0.0];
-            let solves_before = ws.factor.solves;
+            let solves_before = ws.factorization().numeric().solves;
             let t0 = Instant::now();
             let r = inst
                 .update(eps, &mut ws, TangentRequest::Consistent)
@@ -87,7 +91,7 @@ fn bench(path: &str) -> Row {
             let dt = t0.elapsed().as_secs_f64();
             inst.commit().expect("commit");
             let solves: Vec<f64> = (0..5)
-                .map(|w| (ws.factor.solves[w] - solves_before[w]) as f64)
+                .map(|w| (ws.factorization().numeric().solves[w] - solves_before[w]) as f64)
                 .collect();
             // Factorization and solves of the converged tangent, timed on their own.
             let (mut ft, mut lt) = (Vec::new(), Vec::new());
@@ -98,10 +102,10 @@ fn bench(path: &str) -> Row {
                     .linear
                     .factorize(
                         &model.disc.pattern.symbolic,
-                        &ws.k,
-                        &mut ws.factor,
+                        ws.tangent_values(),
+                        &mut numeric,
                         true,
-                        MemStack::new(&mut ws.stack),
+                        MemStack::new(&mut stack),
                     )
                     .expect("factorization");
                 ft.push(t.elapsed().as_secs_f64());
@@ -112,15 +116,15 @@ fn bench(path: &str) -> Row {
                 }
                 let n = model.disc.n();
                 for (times, width) in st.iter_mut().zip(SOLVE_WIDTHS) {
-                    let rhs = &mut ws.rhs4[..width * n];
-                    rhs[..n].copy_from_slice(&ws.r);
+                    let rhs = &mut rhs4[..width * n];
+                    rhs[..n].copy_from_slice(ws.residual());
                     rhs[n..].copy_from_slice(&model.disc.g[..(width - 1) * n]);
                     let t = Instant::now();
                     model.linear.solve_in_place(
-                        &mut ws.factor,
+                        &mut numeric,
                         rhs,
                         width,
-                        MemStack::new(&mut ws.stack),
+                        MemStack::new(&mut stack),
                     );
                     times.push(t.elapsed().as_secs_f64());
                 }
@@ -129,10 +133,10 @@ fn bench(path: &str) -> Row {
                     .linear
                     .factorize(
                         &model.disc.pattern.symbolic,
-                        &ws.k,
-                        &mut ws.factor,
+                        ws.tangent_values(),
+                        &mut numeric,
                         false,
-                        MemStack::new(&mut ws.stack),
+                        MemStack::new(&mut stack),
                     )
                     .expect("lu");
                 lt.push(t.elapsed().as_secs_f64());

@@ -29,7 +29,8 @@ pub use error::{Error, Result};
 pub use model::{Instance, Model, Response};
 pub use scene::Scene;
 pub use solver::TangentRequest;
-pub use state::{State, Workspace};
+pub use solver::Workspace;
+pub use state::State;
 
 /// The crate version, `major.minor.patch`, as in Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

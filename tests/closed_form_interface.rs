@@ -920,7 +920,7 @@ fn snap_back_run(
                     eps[0],
                     instance.committed().strain[0],
                     snap + 1,
-                    Residuals(&ws.residuals)
+                    Residuals(ws.residual_history())
                 ))
             }
         };
@@ -930,7 +930,7 @@ fn snap_back_run(
             if verbose {
                 eprintln!(
                     "  snap increment, relative residuals of the (last) Newton loop: {:.2e}",
-                    Residuals(&ws.residuals)
+                    Residuals(ws.residual_history())
                 );
             }
         }

@@ -67,8 +67,8 @@ fn follow(
                 factorizations: r.report.factorizations,
                 limit_points: r.report.limit_points,
                 sig_xx: r.stress[0],
-                residuals: ws.residuals.clone(),
-                signatures: ws.branch_signatures.clone(),
+                residuals: ws.residual_history().to_vec(),
+                signatures: ws.branch_signatures().to_vec(),
             }
         })
         .collect()

@@ -61,7 +61,6 @@ fn update_and_commit_do_not_allocate() {
 /// warm-up call, factorizing and solving allocate nothing.
 #[test]
 fn checked_lblt_does_not_allocate() {
-    use faer::dyn_stack::MemStack;
     use rve::solver::FactorKind;
 
     let scene = common::scene("scenes/paper_rve.toml");
@@ -76,28 +75,20 @@ fn checked_lblt_does_not_allocate() {
     let mean_diagonal = pattern
         .diagonal_slots
         .iter()
-        .map(|&s| ws.k[s as usize])
+        .map(|&s| ws.tangent_values()[s as usize])
         .sum::<f64>()
         / pattern.n as f64;
-    let mut values = ws.k.clone();
+    let mut values = ws.tangent_values().to_vec();
     for &s in &pattern.diagonal_slots {
         values[s as usize] -= 0.25 * mean_diagonal;
     }
     let mut rhs = vec![1.0; pattern.n];
     let run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
-        let kind = model
-            .linear
-            .factorize(
-                &pattern.symbolic,
-                &values,
-                &mut ws.factor,
-                true,
-                MemStack::new(&mut ws.stack),
-            )
+        let factorization = ws.factorization();
+        let kind = factorization
+            .factorize(&model.linear, &pattern.symbolic, &values, false)
             .unwrap();
-        model
-            .linear
-            .solve_in_place(&mut ws.factor, rhs, 1, MemStack::new(&mut ws.stack));
+        factorization.solve(&model.linear, rhs, 1);
         kind
     };
     assert_eq!(run(&mut ws, &mut rhs), FactorKind::Lblt);

@@ -89,7 +89,7 @@ fn follow(model: &Arc<Model>, strains: &[[f64; 3]]) -> Curve {
                     .committed()
                     .history
                     .iter()
-                    .filter(|h| h.delta_max > DELTA_C)
+                    .filter(|&&delta_max| delta_max > DELTA_C)
                     .count();
                 points.push(Point {
                     eps: *eps,
@@ -260,7 +260,7 @@ fn section_5_1_sigma_c_and_loading_cases() {
             .committed()
             .history
             .iter()
-            .fold(0.0f64, |a, h| a.max(h.delta_max))
+            .fold(0.0f64, |a, &delta_max| a.max(delta_max))
             / DELTA_C;
         println!("{name}: delta_max = {d:.3} delta_c");
         opening.push(d);

@@ -12,16 +12,17 @@
 //! enter the interface jumps: both faces of an ITZ element sit at the same reference point,
 //! so `eps y` has no jump there.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 use super::pattern::{Pattern, NO_SLOT};
-use crate::constraint::{DofMap, FIXED};
-use crate::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature, TangentKind};
+use crate::constraint::{BoundaryCondition, DofMap, FIXED};
+use crate::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature};
 use crate::error::Result;
-use crate::interface::{CohesiveHistory, CohesiveLaw};
+use crate::interface::{InterfaceLaw, TangentKind};
 use crate::material::{Analysis, IsotropicElastic};
-use crate::mesh::{Mesh, Phase};
-use crate::scene::BoundaryKind;
+use crate::mesh::{InterfaceElement, Mesh, Phase};
 
 /// A bulk triangle, precomputed: strain operator, area, elastic matrix, dofs.
 #[derive(Clone, Debug)]
@@ -56,8 +57,9 @@ pub struct Discretization {
     pub bulk: Vec<BulkElement>,
     pub interfaces: Vec<InterfaceGeometry>,
     pub interface_dofs: Vec<[u32; 8]>,
-    /// `None` when the scene has no cohesive ITZ (then there are no interface elements).
-    pub law: Option<CohesiveLaw>,
+    /// The interface law; `None` when the scene has no ITZ (then there are no interface
+    /// elements).
+    pub law: Option<Arc<dyn InterfaceLaw>>,
     pub quadrature: InterfaceQuadrature,
     pub pattern: Pattern,
     /// Values of `K_const` on the pattern.
@@ -66,9 +68,6 @@ pub struct Discretization {
     pub g: Vec<f64>,
     /// Cell area `V_mu`.
     pub volume: f64,
-    /// Diagonal of the bulk stiffness (zero for multipliers): the metric of the relaxed
-    /// Newton's pseudo-time term.
-    pub mass: Vec<f64>,
 }
 
 /// Inputs of [`Discretization::new`] besides the mesh.
@@ -76,9 +75,9 @@ pub struct DiscretizationSpec {
     pub analysis: Analysis,
     pub matrix: IsotropicElastic,
     pub aggregate: IsotropicElastic,
-    pub law: Option<CohesiveLaw>,
+    pub law: Option<Arc<dyn InterfaceLaw>>,
     pub quadrature: InterfaceQuadrature,
-    pub boundary: BoundaryKind,
+    pub boundary: BoundaryCondition,
 }
 
 impl Discretization {
@@ -106,7 +105,7 @@ impl Discretization {
         let (interfaces, interface_dofs): (Vec<_>, Vec<_>) = if spec.law.is_some() {
             mesh.interfaces
                 .iter()
-                .map(|e| (InterfaceGeometry::from(e), dofs.element_dofs(e.nodes)))
+                .map(|e| (interface_geometry(e), dofs.element_dofs(e.nodes)))
                 .unzip()
         } else {
             (Vec::new(), Vec::new())
@@ -137,23 +136,13 @@ impl Discretization {
                 }
             }
         }
-        let mass = (0..n)
-            .map(|i| {
-                if i < dofs.n_reduced {
-                    k_const[pattern.diagonal_slots[i] as usize]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
         Ok(Discretization {
-            mass,
             analysis: spec.analysis,
             dofs,
             bulk,
             interfaces,
             interface_dofs,
-            law: spec.law,
+            law: spec.law.clone(),
             quadrature: spec.quadrature,
             pattern,
             k_const,
@@ -172,9 +161,30 @@ impl Discretization {
         self.quadrature.num_points()
     }
 
-    /// Length of the interface history array (elements x points).
+    /// History values per interface element (points x the law's values per point).
+    fn history_per_interface(&self) -> usize {
+        self.law
+            .as_ref()
+            .map_or(0, |law| self.points_per_interface() * law.history_len())
+    }
+
+    /// Length of the flat interface history (elements x points x values per point).
     pub fn history_len(&self) -> usize {
-        self.interfaces.len() * self.points_per_interface()
+        self.interfaces.len() * self.history_per_interface()
+    }
+
+    /// Whether some interface point passes the peak of its law between the histories
+    /// `start` and `trial` (see [`InterfaceLaw::passes_peak`]).
+    pub fn passes_peak(&self, start: &[f64], trial: &[f64]) -> bool {
+        let Some(law) = &self.law else {
+            return false;
+        };
+        let hl = law.history_len();
+        hl > 0
+            && start
+                .chunks_exact(hl)
+                .zip(trial.chunks_exact(hl))
+                .any(|(s, t)| law.passes_peak(s, t))
     }
 
     /// Gathers the element vector of `dofs` from the unknowns `x` (fixed dofs are zero).
@@ -195,8 +205,8 @@ impl Discretization {
         &self,
         x: &[f64],
         eps: &[f64; 3],
-        committed: &[CohesiveHistory],
-        trial: &mut [CohesiveHistory],
+        committed: &[f64],
+        trial: &mut [f64],
         r: &mut [f64],
         k: Option<&mut [f64]>,
     ) -> SystemEvaluation {
@@ -210,8 +220,8 @@ impl Discretization {
         &self,
         x: &[f64],
         eps: &[f64; 3],
-        committed: &[CohesiveHistory],
-        trial: &mut [CohesiveHistory],
+        committed: &[f64],
+        trial: &mut [f64],
         r: &mut [f64],
         k: Option<&mut [f64]>,
         kind: TangentKind,
@@ -234,13 +244,13 @@ impl Discretization {
             branch_signature: FNV_OFFSET,
             ..Default::default()
         };
-        let Some(law) = &self.law else {
+        let Some(law) = self.law.as_deref() else {
             return counts;
         };
-        let np = self.points_per_interface();
+        let per_element = self.history_per_interface();
         for (e, (geometry, dofs)) in self.interfaces.iter().zip(&self.interface_dofs).enumerate() {
             let u = Self::gather(x, dofs);
-            let range = e * np..(e + 1) * np;
+            let range = e * per_element..(e + 1) * per_element;
             let resp = interface4::evaluate_with(
                 geometry,
                 self.quadrature,
@@ -279,5 +289,14 @@ fn scatter(values: &mut [f64], slots: &[u32], entries: &[f64]) {
         if s != NO_SLOT {
             values[s as usize] += v;
         }
+    }
+}
+
+/// What the interface kernel needs of a mesh's interface element.
+fn interface_geometry(e: &InterfaceElement) -> InterfaceGeometry {
+    InterfaceGeometry {
+        length: e.length,
+        tangent: e.tangent,
+        normal: e.normal,
     }
 }

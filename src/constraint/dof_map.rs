@@ -18,7 +18,19 @@
 //! Taylor >= linear >= periodic >= minimal.
 
 use crate::mesh::Mesh;
-use crate::scene::BoundaryKind;
+
+/// The kinematic constraint on the fluctuation, stiffest first (the spaces are nested).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoundaryCondition {
+    /// `u~ = 0` everywhere.
+    Taylor,
+    /// `u~ = 0` on the boundary (eq. 12).
+    Linear,
+    /// `u~(y+) = u~(y-)` (eq. 10).
+    Periodic,
+    /// `int u~ (x) n dA = 0` on the boundary (eq. 11).
+    Minimal,
+}
 
 /// Marker of a dof fixed at zero.
 pub const FIXED: u32 = u32::MAX;
@@ -37,7 +49,7 @@ pub struct DofMap {
 
 impl DofMap {
     /// Builds the map for `kind` on `mesh` (whose opposite sides must match for periodic).
-    pub fn build(mesh: &Mesh, kind: BoundaryKind) -> Self {
+    pub fn build(mesh: &Mesh, kind: BoundaryCondition) -> Self {
         let n_dofs = 2 * mesh.nodes.len();
         let b = &mesh.boundary;
         // master[node] = the node whose unknowns it shares (itself if independent),
@@ -45,8 +57,8 @@ impl DofMap {
         let mut master: Vec<usize> = (0..mesh.nodes.len()).collect();
         let fix = |master: &mut Vec<usize>, n: usize| master[n] = usize::MAX;
         match kind {
-            BoundaryKind::Taylor => master.iter_mut().for_each(|m| *m = usize::MAX),
-            BoundaryKind::Linear => {
+            BoundaryCondition::Taylor => master.iter_mut().for_each(|m| *m = usize::MAX),
+            BoundaryCondition::Linear => {
                 for &n in b
                     .corners
                     .iter()
@@ -58,7 +70,7 @@ impl DofMap {
                     fix(&mut master, n);
                 }
             }
-            BoundaryKind::Periodic => {
+            BoundaryCondition::Periodic => {
                 for &n in &b.corners {
                     fix(&mut master, n);
                 }
@@ -69,7 +81,7 @@ impl DofMap {
                     master[t] = bo;
                 }
             }
-            BoundaryKind::Minimal => fix(&mut master, b.corners[0]),
+            BoundaryCondition::Minimal => fix(&mut master, b.corners[0]),
         }
         let mut reduced = vec![FIXED; n_dofs];
         let mut n_reduced = 0u32;
@@ -89,7 +101,7 @@ impl DofMap {
                 }
             }
         }
-        let constraint_rows = if kind == BoundaryKind::Minimal {
+        let constraint_rows = if kind == BoundaryCondition::Minimal {
             minimal_rows(mesh, &reduced)
         } else {
             Vec::new()

@@ -3,4 +3,4 @@
 
 mod dof_map;
 
-pub use dof_map::{DofMap, FIXED};
+pub use dof_map::{BoundaryCondition, DofMap, FIXED};

@@ -57,8 +57,7 @@
 
 use nalgebra::{Matrix2, SMatrix, SVector, Vector2};
 
-use crate::interface::{Branch, CohesiveHistory, CohesiveLaw};
-use crate::mesh::InterfaceElement;
+use crate::interface::{Branch, InterfaceLaw, TangentKind};
 
 /// The largest number of quadrature points of any [`InterfaceQuadrature`].
 ///
@@ -142,16 +141,6 @@ impl InterfaceGeometry {
     }
 }
 
-impl From<&InterfaceElement> for InterfaceGeometry {
-    fn from(e: &InterfaceElement) -> Self {
-        InterfaceGeometry {
-            length: e.length,
-            tangent: e.tangent,
-            normal: e.normal,
-        }
-    }
-}
-
 /// Internal force, tangent and branch statistics of one interface element.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InterfaceResponse {
@@ -213,10 +202,10 @@ pub fn local_jumps(
 
 /// Evaluates the element: internal force, consistent tangent, and the trial histories.
 ///
-/// `committed` holds the converged history of each quadrature point, `trial` receives the
-/// trial history of each point (advanced only where the point is loading); both are
-/// indexed by point in increasing `xi` and must hold at least `quadrature.num_points()`
-/// entries (extra entries are neither read nor written). `u` is the element's total
+/// `committed` holds the converged history of the element's quadrature points, `trial`
+/// receives their trial history; both hold `law.history_len()` values per point, points
+/// in increasing `xi`, and at least `quadrature.num_points()` points (extra entries are
+/// neither read nor written). `u` is the element's total
 /// displacement in the dof order of the module doc. Allocation free.
 ///
 /// # Panics
@@ -224,10 +213,10 @@ pub fn local_jumps(
 pub fn evaluate(
     geometry: &InterfaceGeometry,
     quadrature: InterfaceQuadrature,
-    law: &CohesiveLaw,
-    committed: &[CohesiveHistory],
+    law: &dyn InterfaceLaw,
+    committed: &[f64],
     u: &SVector<f64, 8>,
-    trial: &mut [CohesiveHistory],
+    trial: &mut [f64],
 ) -> InterfaceResponse {
     evaluate_with(
         geometry,
@@ -240,29 +229,18 @@ pub fn evaluate(
     )
 }
 
-/// Which matrix [`evaluate_with`] returns as `stiffness`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum TangentKind {
-    /// `dF/du`, eqs. 41-47.
-    #[default]
-    Consistent,
-    /// The secant matrix of the law ([`CohesiveLaw::secant_matrix`]) in place of `dt/d delta`:
-    /// positive definite, with `F = K_secant u` exactly.
-    Secant,
-}
-
 /// [`evaluate`] with a choice of matrix.
 pub fn evaluate_with(
     geometry: &InterfaceGeometry,
     quadrature: InterfaceQuadrature,
-    law: &CohesiveLaw,
-    committed: &[CohesiveHistory],
+    law: &dyn InterfaceLaw,
+    committed: &[f64],
     u: &SVector<f64, 8>,
-    trial: &mut [CohesiveHistory],
+    trial: &mut [f64],
     kind: TangentKind,
 ) -> InterfaceResponse {
     let rule = quadrature.rule();
-    let (committed, trial) = (&committed[..rule.len()], &mut trial[..rule.len()]);
+    let hl = law.history_len();
     debug_assert!(
         (geometry.normal[0] - geometry.tangent[1]).abs() < 1e-12
             && (geometry.normal[1] + geometry.tangent[0]).abs() < 1e-12,
@@ -278,13 +256,17 @@ pub fn evaluate_with(
     let (mut loading, mut unloading, mut contact) = (0, 0, 0);
     let mut branches = 0u8;
 
-    for (point, ((&(xi, w), hist), out)) in
-        rule.iter().zip(committed).zip(trial.iter_mut()).enumerate()
-    {
+    for (point, &(xi, w)) in rule.iter().enumerate() {
         let shape = [0.5 * (1.0 - xi), 0.5 * (1.0 + xi)];
         let jl = r * (j0 * shape[0] + j1 * shape[1]);
-        let p = law.evaluate(hist, [jl[0], jl[1]], geometry.length);
-        *out = p.history;
+        let span = point * hl..(point + 1) * hl;
+        let p = law.respond(
+            &committed[span.clone()],
+            &mut trial[span],
+            [jl[0], jl[1]],
+            geometry.length,
+            kind,
+        );
         let code = match p.branch {
             Branch::Loading => {
                 loading += 1;
@@ -302,11 +284,7 @@ pub fn evaluate_with(
         branches |= code << (2 * point);
         let wl = w * half_l;
         let tg = r.transpose() * p.traction;
-        let c = match kind {
-            TangentKind::Consistent => p.tangent,
-            TangentKind::Secant => law.secant_matrix(&p),
-        };
-        let cg = r.transpose() * c * r;
+        let cg = r.transpose() * p.matrix * r;
         for (i, &ni) in shape.iter().enumerate() {
             let f = tg * (wl * ni);
             fb[2 * i] += f[0];
@@ -340,7 +318,7 @@ pub fn evaluate_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interface::{ContactShear, Penalty};
+    use crate::interface::{CohesiveLaw, ContactShear, Penalty};
 
     const DC: f64 = 2e-4;
     const QUADS: [InterfaceQuadrature; 2] =
@@ -362,8 +340,8 @@ mod tests {
         InterfaceGeometry::from_nodes([1.0, 0.5], [1.3, 0.9])
     }
 
-    fn history_at(delta: f64) -> [CohesiveHistory; MAX_POINTS] {
-        [CohesiveHistory { delta_max: delta }; MAX_POINTS]
+    fn history_at(delta: f64) -> [f64; MAX_POINTS] {
+        [delta; MAX_POINTS]
     }
 
     /// Element displacement: an arbitrary motion of side A (translation, small rotation,
@@ -387,10 +365,10 @@ mod tests {
     fn eval(
         g: &InterfaceGeometry,
         q: InterfaceQuadrature,
-        committed: &[CohesiveHistory],
+        committed: &[f64],
         u: &SVector<f64, 8>,
-    ) -> (InterfaceResponse, [CohesiveHistory; MAX_POINTS]) {
-        let mut trial = [CohesiveHistory::default(); MAX_POINTS];
+    ) -> (InterfaceResponse, [f64; MAX_POINTS]) {
+        let mut trial = [0.0; MAX_POINTS];
         let r = evaluate(g, q, &law(), committed, u, &mut trial);
         (r, trial)
     }
@@ -400,7 +378,7 @@ mod tests {
     fn fd_error(
         g: &InterfaceGeometry,
         q: InterfaceQuadrature,
-        committed: &[CohesiveHistory],
+        committed: &[f64],
         u: &SVector<f64, 8>,
     ) -> f64 {
         let (r0, _) = eval(g, q, committed, u);
@@ -449,13 +427,6 @@ mod tests {
         assert!((g.length - 0.5).abs() < 1e-15);
         assert!((g.tangent[0] - 0.6).abs() < 1e-15 && (g.tangent[1] - 0.8).abs() < 1e-15);
         assert_eq!(g.normal, [g.tangent[1], -g.tangent[0]]);
-        let e = InterfaceElement {
-            nodes: [0, 1, 2, 3],
-            length: g.length,
-            tangent: g.tangent,
-            normal: g.normal,
-        };
-        assert_eq!(InterfaceGeometry::from(&e), g);
     }
 
     #[test]
@@ -474,7 +445,7 @@ mod tests {
     fn stiffness_matches_fd_loading() {
         let g = geom();
         let u = displacement(&g, [[0.5 * DC, 0.8 * DC], [-0.3 * DC, 1.6 * DC]]);
-        let virgin = [CohesiveHistory::default(); MAX_POINTS];
+        let virgin = [0.0; MAX_POINTS];
         for q in QUADS {
             let (r, _) = eval(&g, q, &virgin, &u);
             assert_eq!(r.loading, q.num_points());
@@ -501,10 +472,7 @@ mod tests {
     fn stiffness_matches_fd_contact() {
         let g = geom();
         let u = displacement(&g, [[0.2 * DC, -0.5 * DC], [-0.4 * DC, -0.1 * DC]]);
-        for committed in [
-            [CohesiveHistory::default(); MAX_POINTS],
-            history_at(2.0 * DC),
-        ] {
+        for committed in [[0.0; MAX_POINTS], history_at(2.0 * DC)] {
             for q in QUADS {
                 let (r, trial) = eval(&g, q, &committed, &u);
                 assert_eq!(r.contact, q.num_points());
@@ -531,7 +499,7 @@ mod tests {
         for q in QUADS {
             let err = fd_error(&g, q, &committed, &u);
             assert!(err < 1e-6, "{q:?}: rel err {err:e}");
-            let virgin = [CohesiveHistory::default(); MAX_POINTS];
+            let virgin = [0.0; MAX_POINTS];
             let err = fd_error(&g, q, &virgin, &u);
             assert!(err < 1e-6, "{q:?} virgin: rel err {err:e}");
         }
@@ -543,20 +511,23 @@ mod tests {
         let u = displacement(&g, [[0.3 * DC, 1.0 * DC], [0.2 * DC, -0.8 * DC]]);
         let committed = history_at(0.5 * DC);
         for q in QUADS {
-            let sentinel = CohesiveHistory { delta_max: -1.0 };
+            let sentinel = -1.0;
             let mut trial = [sentinel; MAX_POINTS];
             evaluate(&g, q, &law(), &committed, &u, &mut trial);
             let jumps = local_jumps(&g, q, &u);
             for i in 0..q.num_points() {
-                let p = law().evaluate(&committed[i], jumps[i], g.length);
-                assert_eq!(trial[i], p.history);
+                let history = crate::interface::CohesiveHistory {
+                    delta_max: committed[i],
+                };
+                let p = law().evaluate(&history, jumps[i], g.length);
+                assert_eq!(trial[i], p.history.delta_max);
             }
             for t in &trial[q.num_points()..] {
                 assert_eq!(*t, sentinel, "entries past num_points are not written");
             }
         }
         // Lobatto2 accepts exactly two entries.
-        let mut two = [CohesiveHistory::default(); 2];
+        let mut two = [0.0; 2];
         evaluate(
             &g,
             InterfaceQuadrature::Lobatto2,
@@ -565,7 +536,7 @@ mod tests {
             &u,
             &mut two,
         );
-        assert!(two[0].delta_max > 0.5 * DC);
+        assert!(two[0] > 0.5 * DC);
     }
 
     #[test]
@@ -583,7 +554,7 @@ mod tests {
             }
         }
         for q in QUADS {
-            for committed in [[CohesiveHistory::default(); MAX_POINTS], history_at(DC)] {
+            for committed in [[0.0; MAX_POINTS], history_at(DC)] {
                 let (r, trial) = eval(&g, q, &committed, &u);
                 assert_eq!(r.force, SVector::<f64, 8>::zeros());
                 assert!(local_jumps(&g, q, &u).iter().all(|j| *j == [0.0, 0.0]));
@@ -597,7 +568,7 @@ mod tests {
         let g = geom();
         let u = displacement(&g, [[0.5 * DC, 0.8 * DC], [-0.3 * DC, 1.6 * DC]]);
         for q in QUADS {
-            let (r, _) = eval(&g, q, &[CohesiveHistory::default(); MAX_POINTS], &u);
+            let (r, _) = eval(&g, q, &[0.0; MAX_POINTS], &u);
             let f = r.force;
             for c in 0..2 {
                 let sum: f64 = (0..4).map(|k| f[2 * k + c]).sum();
@@ -622,7 +593,7 @@ mod tests {
         let g = geom();
         let u = displacement(&g, [[0.2 * DC, 0.5 * DC], [0.4 * DC, 1.0 * DC]]);
         let committed = history_at(3.0 * DC);
-        let k = law().envelope(committed[0].delta_max) / committed[0].delta_max; // eq. 24
+        let k = law().envelope(committed[0]) / committed[0]; // eq. 24
         let r = g.rotation();
         let cg = r.transpose() * Matrix2::new(k * 0.707 * 0.707, 0.0, 0.0, k) * r;
         let l = g.length;
@@ -680,7 +651,7 @@ mod tests {
                 let ks = r0.stiffness.norm();
                 assert!((r.stiffness - q8 * r0.stiffness * q8.transpose()).norm() <= 1e-12 * ks);
                 for i in 0..q.num_points() {
-                    assert!((t[i].delta_max - t0[i].delta_max).abs() <= 1e-12 * DC);
+                    assert!((t[i] - t0[i]).abs() <= 1e-12 * DC);
                 }
                 assert!(fd_error(&g, q, &committed, &u) < 1e-6);
             }
@@ -691,12 +662,12 @@ mod tests {
     fn per_area_penalty_is_length_independent() {
         let g = geom();
         let u = displacement(&g, [[0.0, -0.5 * DC], [0.0, -0.5 * DC]]);
-        let committed = [CohesiveHistory::default(); MAX_POINTS];
+        let committed = [0.0; MAX_POINTS];
         let per_area = CohesiveLaw {
             penalty: Penalty::PerArea { stiffness: 1e6 },
             ..law()
         };
-        let mut trial = [CohesiveHistory::default(); MAX_POINTS];
+        let mut trial = [0.0; MAX_POINTS];
         for q in QUADS {
             let r = evaluate(&g, q, &per_area, &committed, &u, &mut trial);
             // Uniform closure: total normal force on side B = k * dn * l_e.

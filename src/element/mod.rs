@@ -4,6 +4,4 @@
 pub mod interface4;
 pub mod triangle;
 
-pub use interface4::{
-    InterfaceGeometry, InterfaceQuadrature, InterfaceResponse, TangentKind, MAX_POINTS,
-};
+pub use interface4::{InterfaceGeometry, InterfaceQuadrature, InterfaceResponse, MAX_POINTS};

@@ -12,7 +12,8 @@ use super::boundary::{Failure, FfiResult};
 use super::status::RveStatus;
 use crate::model::{Model, Response};
 use crate::solver::TangentRequest;
-use crate::state::{State, Workspace};
+use crate::solver::Workspace;
+use crate::state::State;
 
 const MAX_GENERATION: u32 = (1 << 20) - 1;
 

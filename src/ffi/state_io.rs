@@ -146,13 +146,13 @@ pub(crate) fn decode(model: &Model, bytes: &[u8]) -> FfiResult<State> {
     {
         return Err(bad("non-finite values"));
     }
-    if state
-        .history
-        .iter()
-        .any(|h| !(h.delta_max.is_finite() && h.delta_max >= 0.0))
-    {
+    let admissible = match &model.disc.law {
+        Some(law) => law.history_is_valid(&state.history),
+        None => state.history.iter().all(|v| v.is_finite()),
+    };
+    if !admissible {
         return Err(bad(
-            "an interface history delta_max that is negative or not finite",
+            "an interface history value that is negative or not finite",
         ));
     }
     Ok(state)

@@ -5,7 +5,7 @@ use std::cell::RefCell;
 use std::sync::{Arc, Weak};
 
 use crate::model::Model;
-use crate::state::Workspace;
+use crate::solver::Workspace;
 
 thread_local! {
     /// Keyed by the model's address; the weak reference keeps that address from being

@@ -58,10 +58,7 @@
 //! just open, `t_s = k beta^2 delta_s` with the (possibly damaged) cohesive secant `k`; just
 //! closed, `t_s = k_p delta_s`. On paths that close some ITZ points while sliding them, e.g.
 //! a uniaxial macro stress with its Poisson contraction, the discrete equilibrium can then
-//! have no solution near the switch, and every solver cycles (measured: the paper's RVE under
-//! `eps = t [1, -0.1935, -3.6e-4]` fails at `eps_xx = 3.3e-5` with the paper's law and
-//! converges to past the peak with `Cohesive`). The shipped paper scenes keep the paper's
-//! law; hosts that drive general strain paths should choose `Cohesive`.
+//! have no solution near the switch (measured in `docs/robustness.md`).
 //!
 //! The loading secant and tangent derive from the potential `phi(delta)` with
 //! `dphi/d delta = t(delta)`, so `C` is symmetric in every branch.
@@ -106,6 +103,8 @@
 //! `delta_c > 0`, `beta >= 0`, penalty `> 0`, `length > 0`.
 
 use nalgebra::{Matrix2, Vector2};
+
+use super::law::{Branch, InterfaceLaw, LawPoint, TangentKind};
 
 /// Contact penalty on a closed interface point (eqs. 36-37).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -161,18 +160,6 @@ pub struct CohesiveLaw {
 pub struct CohesiveHistory {
     /// Largest effective opening reached on the loading branch.
     pub delta_max: f64,
-}
-
-/// Which branch of the law a point is on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Branch {
-    /// `delta >= delta_max`: on the envelope (eq. 23), history advances.
-    Loading,
-    /// `delta < delta_max`: secant to the origin (eq. 24), history unchanged.
-    Unloading,
-    /// Contact on and `delta_n < 0`: penalty (eqs. 36-37); history unchanged with
-    /// [`ContactShear::Penalty`], advanced by the sliding with [`ContactShear::Cohesive`].
-    Contact,
 }
 
 /// The response of the law at one point for a trial jump.
@@ -336,6 +323,62 @@ impl CohesiveLaw {
                 secant: k,
             }
         }
+    }
+}
+
+impl InterfaceLaw for CohesiveLaw {
+    /// `delta_max`: the paper's pair `(delta_max, t_max)` has one degree of freedom (see
+    /// [`CohesiveHistory`]).
+    fn history_len(&self) -> usize {
+        1
+    }
+
+    fn respond(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        length: f64,
+        kind: TangentKind,
+    ) -> LawPoint {
+        let history = CohesiveHistory {
+            delta_max: committed[0],
+        };
+        let point = self.evaluate(&history, jump, length);
+        trial[0] = point.history.delta_max;
+        LawPoint {
+            traction: point.traction,
+            matrix: match kind {
+                TangentKind::Consistent => point.tangent,
+                TangentKind::Secant => self.secant_matrix(&point),
+            },
+            branch: point.branch,
+        }
+    }
+
+    /// A point passes the peak of the envelope when its `delta_max` crosses `delta_c`.
+    fn passes_peak(&self, start: &[f64], trial: &[f64]) -> bool {
+        trial[0] >= self.delta_c && start[0] < self.delta_c
+    }
+
+    /// `delta_max` is a non-negative opening.
+    fn history_is_valid(&self, history: &[f64]) -> bool {
+        history.iter().all(|d| d.is_finite() && *d >= 0.0)
+    }
+
+    /// With the paper's contact law, closed points that slide can leave the RVE without
+    /// equilibrium (see the module docs); the message names the remedy.
+    fn failure_hint(&self, closed_points: usize) -> Option<String> {
+        (self.contact && self.contact_shear == ContactShear::Penalty && closed_points > 0).then(
+            || {
+                format!(
+                "; {closed_points} ITZ points are closed at the last iterate: with the paper's \
+                 contact law (materials.itz.contact_shear = \"penalty\") the shear traction \
+                 jumps at closure and sliding closed points can leave the RVE without \
+                 equilibrium; contact_shear = \"cohesive\" keeps it continuous"
+            )
+            },
+        )
     }
 }
 

@@ -1,5 +1,10 @@
-//! Constitutive laws of the zero-thickness interfaces (ITZ): the cohesive-contact law.
+//! Constitutive laws of the zero-thickness interfaces (ITZ), behind the [`InterfaceLaw`]
+//! trait: the paper's cohesive-contact law and a linear elastic interface.
 
 mod cohesive;
+mod law;
+mod linear;
 
-pub use cohesive::{Branch, CohesiveHistory, CohesiveLaw, CohesivePoint, ContactShear, Penalty};
+pub use cohesive::{CohesiveHistory, CohesiveLaw, CohesivePoint, ContactShear, Penalty};
+pub use law::{Branch, InterfaceLaw, LawPoint, TangentKind};
+pub use linear::LinearInterface;

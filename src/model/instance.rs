@@ -5,7 +5,8 @@ use std::sync::Arc;
 use super::rve_model::{Model, Response};
 use crate::error::{Error, Result};
 use crate::solver::TangentRequest;
-use crate::state::{State, Workspace};
+use crate::solver::Workspace;
+use crate::state::State;
 
 /// An RVE instance: what a host keeps per integration point.
 #[derive(Debug)]

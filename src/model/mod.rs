@@ -1,6 +1,8 @@
 //! The safe Rust API: a shared immutable [`Model`] per scene, a small [`Instance`] per
-//! material point, and a per-thread [`crate::state::Workspace`].
+//! material point, and a per-thread [`crate::solver::Workspace`]. `from_scene` is the
+//! edge where the scene schema becomes the numerical modules' own types.
 
+mod from_scene;
 mod instance;
 mod rve_model;
 

@@ -3,15 +3,17 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use super::from_scene::{boundary_condition, interface_law, solver_settings};
 use crate::assembly::{Discretization, DiscretizationSpec};
+use crate::constraint::BoundaryCondition;
 use crate::error::{Error, Result};
 use crate::homogenization::Homogenizer;
-use crate::interface::{CohesiveLaw, Penalty};
 use crate::mesh::{build_microstructure, Mesh, Microstructure};
-use crate::scene::BoundaryKind;
-use crate::scene::{Scene, SolverSpec};
-use crate::solver::{solve_increment, IncrementReport, LinearSolver, Problem, TangentRequest};
-use crate::state::{State, Workspace};
+use crate::scene::Scene;
+use crate::solver::{
+    solve_increment, IncrementReport, LinearSolver, Problem, Settings, TangentRequest, Workspace,
+};
+use crate::state::State;
 
 /// Largest strain component accepted: 10 %, a hundred times the strains at which concrete
 /// fails; beyond it a small-strain RVE makes no sense and the input is taken as absurd.
@@ -40,7 +42,7 @@ pub struct Model {
     pub hom: Homogenizer,
     /// Symbolic LL^T and LU analyses of the pattern.
     pub linear: LinearSolver,
-    pub solver: SolverSpec,
+    pub solver: Settings,
     /// Homogenized tangent of the virgin RVE (row-major).
     pub elastic_tangent: [f64; 9],
     /// `-K_el^-1 G` of the virgin RVE (n x 3): the solver's predictor.
@@ -67,25 +69,9 @@ impl Model {
     /// Builds the model on an already built microstructure (tests, custom meshes).
     pub fn from_mesh(scene: &Scene, microstructure: Microstructure) -> Result<Self> {
         let spec = &scene.spec;
-        let law = if spec.effects.cohesive {
-            spec.materials.itz.map(|itz| CohesiveLaw {
-                sigma_c: itz.sigma_c,
-                delta_c: itz.delta_c,
-                beta: itz.beta,
-                penalty: match (itz.penalty.lambda_p, itz.penalty.stiffness) {
-                    (Some(lambda_p), _) => Penalty::PerLength { lambda_p },
-                    (None, Some(stiffness)) => Penalty::PerArea { stiffness },
-                    (None, None) => Penalty::PerArea { stiffness: 0.0 },
-                },
-                contact: spec.effects.contact,
-                contact_shear: itz.contact_shear,
-            })
-        } else {
-            None
-        };
+        let boundary = boundary_condition(spec.boundary.kind);
         let mesh: &Mesh = &microstructure.mesh;
-        if spec.boundary.kind == crate::scene::BoundaryKind::Periodic && !mesh.boundary.sides_match
-        {
+        if boundary == BoundaryCondition::Periodic && !mesh.boundary.sides_match {
             return Err(Error::scene(
                 "boundary.kind",
                 "periodic needs matching nodes on opposite sides, and this mesh has none",
@@ -97,13 +83,13 @@ impl Model {
                 analysis: spec.cell.analysis,
                 matrix: spec.materials.matrix,
                 aggregate: spec.materials.aggregate.unwrap_or(spec.materials.matrix),
-                law,
+                law: interface_law(spec),
                 quadrature: spec.mesh.interface_quadrature,
-                boundary: spec.boundary.kind,
+                boundary,
             },
         )?;
         let hom = Homogenizer::new(&disc);
-        let spd_possible = spec.boundary.kind != BoundaryKind::Minimal;
+        let spd_possible = boundary != BoundaryCondition::Minimal;
         let linear = LinearSolver::new(&disc.pattern.symbolic, spd_possible)?;
         let mut model = Model {
             id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
@@ -112,7 +98,7 @@ impl Model {
             disc,
             hom,
             linear,
-            solver: spec.solver,
+            solver: solver_settings(&spec.solver),
             elastic_tangent: [0.0; 9],
             elastic_sensitivity: Vec::new(),
         };
@@ -128,7 +114,7 @@ impl Model {
             TangentRequest::Consistent,
         )?;
         model.elastic_tangent = response.tangent;
-        model.elastic_sensitivity = ws.kg.iter().map(|v| -v).collect();
+        model.elastic_sensitivity = ws.factorization().kg().iter().map(|v| -v).collect();
         Ok(model)
     }
 
@@ -166,7 +152,7 @@ impl Model {
         trial: &mut State,
         request: TangentRequest,
     ) -> Result<Response> {
-        if ws.model_id != self.id {
+        if ws.model_id() != self.id {
             return Err(Error::WorkspaceMismatch);
         }
         if strain.iter().any(|e| !e.is_finite()) {
@@ -181,29 +167,23 @@ impl Model {
                 reason: format!("a component exceeds {MAX_STRAIN} (small-strain model)"),
             });
         }
-        let mut tangent = [0.0; 9];
         let problem = Problem {
             disc: &self.disc,
-            hom: &self.hom,
             linear: &self.linear,
             settings: &self.solver,
             predictor: &self.elastic_sensitivity,
         };
-        let report = solve_increment(
-            &problem,
-            committed,
-            strain,
-            request,
-            ws,
-            trial,
-            &mut tangent,
-        )?;
+        let solved = solve_increment(&problem, committed, strain, request, ws, trial)?;
+        let tangent = match request {
+            TangentRequest::Consistent => self.hom.tangent_from_condensed(&solved.condensed),
+            TangentRequest::None => [0.0; 9],
+        };
         let (stress, s_zz) = self.hom.stress(&self.disc, &strain, &trial.unknowns);
         Ok(Response {
             stress,
             tangent,
             s_zz,
-            report,
+            report: solved.report,
         })
     }
 }

@@ -8,6 +8,7 @@ mod validate;
 pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
 pub use schema::{
     BoundaryKind, BoundarySpec, CellSpec, EffectsSpec, ElasticSpec, Explicit, ExplicitInclusion,
-    GeometrySpec, GmshSpec, InterfaceQuadratureSpec, ItzSpec, MaterialsSpec, MeshSpec, Orientation,
-    PathSegment, PenaltySpec, RandomSpec, ShapeKind, SolverSpec, StraightInterfaceSpec,
+    GeometrySpec, GmshSpec, InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec,
+    MeshSpec, Orientation, PathSegment, PenaltySpec, RandomSpec, SceneSpec, ShapeKind, SolverSpec,
+    StraightInterfaceSpec,
 };

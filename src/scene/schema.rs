@@ -236,9 +236,21 @@ pub struct MaterialsSpec {
     /// Required when the geometry has inclusions.
     #[serde(default)]
     pub aggregate: Option<ElasticSpec>,
-    /// Required when `effects.cohesive` is on.
+    /// The paper's cohesive-contact ITZ; with `effects.cohesive` on, this or
+    /// `linear_itz` is required.
     #[serde(default)]
     pub itz: Option<ItzSpec>,
+    /// A linear elastic ITZ instead (verification, compliant bonding).
+    #[serde(default)]
+    pub linear_itz: Option<LinearItzSpec>,
+}
+
+/// A linear elastic interface `t = diag(k_s, k_n) delta`, stiffnesses per unit area.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearItzSpec {
+    pub shear_stiffness: f64,
+    pub normal_stiffness: f64,
 }
 
 /// Isotropic linear elasticity: `{ young, poisson }` (the material type itself).

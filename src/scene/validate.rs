@@ -134,16 +134,35 @@ impl SceneSpec {
                 "contact acts on ITZ elements, which need effects.cohesive = true",
             ));
         }
-        if self.effects.cohesive && has_inclusions {
-            let Some(itz) = &self.materials.itz else {
-                return Err(Error::scene(
-                    "materials.itz",
-                    "missing: effects.cohesive is on and the geometry has inclusions",
-                ));
-            };
+        let materials = &self.materials;
+        if materials.itz.is_some() && materials.linear_itz.is_some() {
+            return Err(Error::scene(
+                "materials.linear_itz",
+                "give either materials.itz or materials.linear_itz, not both",
+            ));
+        }
+        if self.effects.cohesive
+            && has_inclusions
+            && materials.itz.is_none()
+            && materials.linear_itz.is_none()
+        {
+            return Err(Error::scene(
+                "materials.itz",
+                "missing: effects.cohesive is on and the geometry has inclusions",
+            ));
+        }
+        if let Some(itz) = &materials.itz {
             validate_itz(itz)?;
-        } else if let Some(itz) = &self.materials.itz {
-            validate_itz(itz)?;
+        }
+        if let Some(linear) = &materials.linear_itz {
+            positive(
+                "materials.linear_itz.shear_stiffness",
+                linear.shear_stiffness,
+            )?;
+            positive(
+                "materials.linear_itz.normal_stiffness",
+                linear.normal_stiffness,
+            )?;
         }
 
         let s = &self.solver;

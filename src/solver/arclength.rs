@@ -4,20 +4,20 @@
 //! `sigma(eps)` has a limit point and snaps back, and under strain control the equilibrium
 //! beyond it lies on another branch. Newton from the pre-snap state then stalls (the
 //! residual norm has a local minimum that is no root), and bisection cannot help, because
-//! the jump is in the physics, not in the step size. This module traces the path instead:
+//! the jump is in the physics, not in the step size. This module traces the path instead.
 //!
 //! With the increment `eps(t) = eps_0 + t Delta eps` the residual is
-//! `R(x, t) = K_const x + G eps(t) + F_itz(x)`, so `dR/dt = f = G Delta eps`. From a converged
-//! point `(x_a, t_a)` an arc-length step (Riks, normal plane) predicts along the tangent
-//! `p = dt_0 dx_f` of length `l` and then asks `(x - x_a) . p = l^2`, solving for `(x, t)`
-//! together: each iteration solves `K dx_R = -R` and `K dx_f = -f` with one factorization,
-//! sets `dx = dx_R + dt dx_f` and takes `dt` from the (linear) constraint. The predictor of
-//! the next point reuses the corrector's last `dx_f` (from `K` at an iterate within the
-//! tolerance of the new point), so a converged point costs no factorization of its own
-//! (`scripts/robustness-study`, cohesive-law paths: factorizations 6545 -> 5816, solver
-//! time 8.5 -> 7.6 s, slowest increment 593 -> 374 ms). Every converged arc
-//! point is committed into the trial history, exactly like a sub-step, so the interface
-//! history follows the traced path. The parameter `t` may decrease along a snap-back.
+//! `R(x, t) = K_const x + G eps(t) + F_itz(x)`, so `dR/dt = f = G Delta eps`. From a
+//! converged point `(x_a, t_a)` an arc-length step (Riks, normal plane) predicts along the
+//! tangent `p = dt_0 dx_f` of length `l` and then asks `(x - x_a) . p = l^2`, solving for
+//! `(x, t)` together: each iteration solves `K dx_R = -R` and `K dx_f = -f` with one
+//! factorization, sets `dx = dx_R + dt dx_f` and takes `dt` from the (linear) constraint.
+//! The predictor of the next point reuses the corrector's last `dx_f` (from `K` at an
+//! iterate within the tolerance of the new point), so a converged point costs no
+//! factorization of its own. Every converged arc point is committed into the trial
+//! history, exactly like a sub-step, so the interface history follows the traced path.
+//! The parameter `t` may decrease along a snap-back. The arc grows by 1.25 after each
+//! converged point and halves after each failed one.
 //!
 //! # Landing
 //! Once the path has come back and the next point would pass the target `t`, the tracer
@@ -26,19 +26,15 @@
 //! point, which lies on the stable post-snap branch. If the landing does not converge, the
 //! arc length is halved and tracing goes on from the same point, so the next landing
 //! starts closer to the target, exactly as after a corrector that does not converge; the
-//! tracer gives up after [`MAX_CUTS`] failures in a row. (Handing a failed landing back to
-//! the caller instead cost a whole bisection of the macro step each time: on the README's
-//! robustness sample, one cohesive increment took 2374 iterations that way, see
-//! `docs/robustness.md`.)
+//! tracer gives up after [`MAX_CUTS`] failures in a row. A trace has no budget on its
+//! total iterations: where an increment lands matters more to a host than what it costs.
 
-use faer::dyn_stack::MemStack;
-
-use super::linear::LinearSolver;
-use super::newton::{evaluate_current, factorize_current, newton, Mode};
-use crate::assembly::Discretization;
-use crate::element::TangentKind;
-use crate::scene::SolverSpec;
-use crate::state::{State, Workspace};
+use super::newton::{newton, Mode};
+use super::problem::{dot, Problem, Strain};
+use super::settings::Settings;
+use super::workspace::Workspace;
+use crate::interface::TangentKind;
+use crate::state::State;
 
 /// Most arc points per call, and corrector iterations per point.
 const MAX_POINTS: u32 = 400;
@@ -50,38 +46,10 @@ const MAX_LANDING: u32 = 12;
 const MAX_CUTS: u32 = 8;
 /// The path is also lost when the arc length falls below this fraction of the first one:
 /// the tracer is stuck at a corner of the path, where tiny points converge at once and
-/// longer ones do not. (Before these two limits the only one was an arc length of 1e-10
-/// of the step: one increment of the robustness sample spent 436 factorizations at such
-/// a corner before the secant iterations solved it.)
+/// longer ones do not.
 const MIN_LENGTH: f64 = 1e-4;
-// No budget on a trace's total iterations. Tried: giving a trace up after 150 corrector
-// and landing iterations (traces that land took 12-79 on the shipped scenes and the
-// robustness sample's ellipse paths; lost ones crawled through 127-340 before the limits
-// above stopped them, and the secant iterations did the work). `scripts/robustness-study`
-// kept every outcome and cut 19 % of the paper-law iterations, but the budget also cut a
-// trace that would have landed in the mixed-control host Newton of
-// `c_examples/macro_newton.c` (step 16): the secant iterations put the host's iterates on
-// different post-peak branches and the host's Newton cycled. Where an increment lands
-// matters more to a host than what it costs.
-
-/// `ws.arc_dxf = -K^-1 f` with the factorization in `ws.factor`: the direction of the
-/// equilibrium path per unit of the load parameter `t`.
-fn load_direction(linear: &LinearSolver, ws: &mut Workspace) {
-    ws.arc_dxf
-        .iter_mut()
-        .zip(&ws.arc_f)
-        .for_each(|(d, f)| *d = -f);
-    linear.solve_in_place(
-        &mut ws.factor,
-        &mut ws.arc_dxf,
-        1,
-        MemStack::new(&mut ws.stack),
-    );
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
+/// Growth of the arc length after a converged point.
+const GROWTH: f64 = 1.25;
 
 /// Work and progress of one traced path, counted whether or not it lands.
 #[derive(Default)]
@@ -95,21 +63,46 @@ pub(super) struct Traced {
     pub limit_points: u32,
 }
 
-/// Traces the path of `eps_0 + t delta` from the converged `trial` at `t = from` and lands
-/// on `t = to` (see the module docs). On success (`true`) `trial.unknowns` is converged at
-/// `eps_0 + to delta` from the history in `ws.hist_base` (the last arc point's, also in
-/// `trial.history`), and `ws.r`/`ws.k`/`ws.hist_trial`/`ws.factor` belong to it, as after
-/// a converged Newton loop. Returns `false` when the path cannot be followed (no real
-/// root, singular system, [`MAX_CUTS`] failed attempts in a row, an arc length below
-/// [`MIN_LENGTH`] of the first, budget exhausted); `trial` then holds the last converged
-/// arc point, still valid. `work` counts what was done either way.
+/// The straight strain path `eps_0 + t delta` of an increment.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct StrainLine {
+    pub origin: Strain,
+    pub delta: Strain,
+}
+
+impl StrainLine {
+    pub(super) fn at(&self, t: f64) -> Strain {
+        let (o, d) = (self.origin, self.delta);
+        [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]]
+    }
+}
+
+/// `ws.trace.dxf = -K^-1 f` with the current factors: the direction of the equilibrium
+/// path per unit of the load parameter `t`.
+fn load_direction(problem: &Problem, ws: &mut Workspace) {
+    let trace = &mut ws.trace;
+    trace
+        .dxf
+        .iter_mut()
+        .zip(&trace.f)
+        .for_each(|(d, f)| *d = -f);
+    ws.factorization.solve(problem.linear, &mut trace.dxf, 1);
+}
+
+/// Traces the path of `line` from the converged `trial` at `t = from` and lands on
+/// `t = to` (see the module docs), with the convergence reference `reference` of the
+/// step's target. On success (`true`) `trial.unknowns` is converged at
+/// `line.at(to)` from the history in `ws.history_start` (the last arc point's, also in
+/// `trial.history`), and `ws.current`/`ws.factorization` belong to it, as after a
+/// converged Newton loop. Returns `false` when the path cannot be followed (singular
+/// system, [`MAX_CUTS`] failed attempts in a row, an arc length below [`MIN_LENGTH`] of
+/// the first, [`MAX_POINTS`] exhausted); `trial` then holds the last converged arc point,
+/// still valid. `work` counts what was done either way.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn trace(
-    disc: &Discretization,
-    linear: &LinearSolver,
-    settings: &SolverSpec,
-    eps_0: [f64; 3],
-    delta: [f64; 3],
+    problem: &Problem,
+    settings: &Settings,
+    line: StrainLine,
     from: f64,
     to: f64,
     reference: f64,
@@ -117,50 +110,27 @@ pub(super) fn trace(
     ws: &mut Workspace,
     work: &mut Traced,
 ) -> bool {
-    let n = disc.n();
     let tolerance = settings.tolerance * reference;
-    let landing = SolverSpec {
-        max_iterations: MAX_LANDING,
-        ..*settings
-    };
-    // f = G delta.
-    for i in 0..n {
-        ws.arc_f[i] =
-            disc.g[i] * delta[0] + disc.g[n + i] * delta[1] + disc.g[2 * n + i] * delta[2];
-    }
-    let eps_at = |t: f64| {
-        [
-            eps_0[0] + t * delta[0],
-            eps_0[1] + t * delta[1],
-            eps_0[2] + t * delta[2],
-        ]
-    };
+    problem.load(&line.delta, &mut ws.trace.f);
     let mut t_a = from;
-    ws.arc_prev.iter_mut().for_each(|v| *v = 0.0);
+    ws.trace.prev.iter_mut().for_each(|v| *v = 0.0);
     let (mut length, mut first_length) = (0.0, 0.0);
     let mut cuts = 0;
     let mut going_forward = true;
-
-    // Whether `ws.arc_dxf` holds a tangent direction for the arc point `x_a`.
+    // Whether `ws.trace.dxf` holds a tangent direction for the arc point `x_a`.
     let mut direction_ready = false;
     for _ in 0..MAX_POINTS {
-        ws.hist_base.copy_from_slice(&trial.history);
-        ws.arc_xa.copy_from_slice(&trial.unknowns);
+        ws.history_start.copy_from_slice(&trial.history);
+        ws.trace.xa.copy_from_slice(&trial.unknowns);
         if !direction_ready {
             // Tangent at the arc point: K dx_f = -f.
-            evaluate_current(
-                disc,
-                &trial.unknowns,
-                &eps_at(t_a),
-                TangentKind::Consistent,
-                ws,
-            );
-            if factorize_current(disc, linear, ws).is_err() {
+            problem.evaluate(&trial.unknowns, &line.at(t_a), TangentKind::Consistent, ws);
+            if problem.factorize(ws, true).is_err() {
                 return false;
             }
-            load_direction(linear, ws);
+            load_direction(problem, ws);
         }
-        let dxf_norm = dot(&ws.arc_dxf, &ws.arc_dxf).sqrt();
+        let dxf_norm = dot(&ws.trace.dxf, &ws.trace.dxf).sqrt();
         if !(dxf_norm.is_finite() && dxf_norm > 0.0) {
             return false;
         }
@@ -170,71 +140,53 @@ pub(super) fn trace(
             first_length = length;
         }
         // Direction: keep going the way the path went (positive t at the start).
-        let sign = if work.points == 0 || dot(&ws.arc_dxf, &ws.arc_prev) >= 0.0 {
+        let sign = if work.points == 0 || dot(&ws.trace.dxf, &ws.trace.prev) >= 0.0 {
             1.0
         } else {
             -1.0
         };
         let dt_pred = sign * length / dxf_norm;
         let converged = if t_a + dt_pred >= to {
-            // The path has come back past the target: land on it under strain control,
-            // from the tangent prediction.
-            for i in 0..n {
-                trial.unknowns[i] = ws.arc_xa[i] + (to - t_a) * ws.arc_dxf[i];
-            }
-            let outcome = newton(
-                disc,
-                linear,
-                &landing,
-                &eps_at(to),
-                &mut trial.unknowns,
-                ws,
-                Mode::Newton,
-                false,
-            );
-            work.iterations += ws.residuals.len().saturating_sub(1) as u32;
-            if outcome.is_ok() {
+            if land(problem, settings, line, t_a, to, trial, ws, work) {
                 return true;
             }
             false
-        } else {
-            let corrected = correct(
-                disc, linear, tolerance, &eps_at, t_a, dt_pred, length, trial, ws, work,
-            );
-            if let Some(t) = corrected {
-                for i in 0..n {
-                    ws.arc_prev[i] = trial.unknowns[i] - ws.arc_xa[i];
-                }
-                trial.history.copy_from_slice(&ws.hist_trial);
-                trial.strain = eps_at(t);
-                let forward = t > t_a;
-                if forward != going_forward {
-                    work.limit_points += 1;
-                    going_forward = forward;
-                }
-                t_a = t;
-                work.points += 1;
-                // Not Crisfield's rule (`sqrt(3 / corrector iterations)`, clamped to
-                // [0.5, 2] or [0.5, 1.25]): on `scripts/robustness-study` it cost 12 %
-                // more iterations on the cohesive-law paths with the narrow clamp, and with
-                // the wide one a snap of `tests/closed_form_interface.rs` landed off the
-                // closed-form branch.
-                length *= 1.25;
-            } else {
-                // The corrector overwrote `arc_dxf`: back to the direction at `x_a`.
-                ws.arc_dxf.copy_from_slice(&ws.arc_pred);
+        } else if let Some(t) = correct(
+            problem, tolerance, line, t_a, dt_pred, length, trial, ws, work,
+        ) {
+            for (p, (x, xa)) in ws
+                .trace
+                .prev
+                .iter_mut()
+                .zip(trial.unknowns.iter().zip(&ws.trace.xa))
+            {
+                *p = x - xa;
             }
-            corrected.is_some()
+            trial.history.copy_from_slice(&ws.current.history);
+            trial.strain = line.at(t);
+            let forward = t > t_a;
+            if forward != going_forward {
+                work.limit_points += 1;
+                going_forward = forward;
+            }
+            t_a = t;
+            work.points += 1;
+            length *= GROWTH;
+            true
+        } else {
+            // The corrector overwrote `dxf`: back to the direction at `x_a`.
+            ws.trace.dxf.copy_from_slice(&ws.trace.pred);
+            false
         };
         // The next predictor's direction: after a converged point, the corrector's last
         // `K^-1 f`, at an iterate within the tolerance of the new point (saves its
         // factorization); after a failed corrector or landing, the one at `x_a` (a landing
-        // leaves `arc_dxf` alone).
+        // leaves `dxf` alone).
         direction_ready = true;
         if converged {
             cuts = 0;
         } else {
-            trial.unknowns.copy_from_slice(&ws.arc_xa);
+            trial.unknowns.copy_from_slice(&ws.trace.xa);
             length *= 0.5;
             cuts += 1;
             if cuts > MAX_CUTS || length < MIN_LENGTH * first_length {
@@ -245,16 +197,53 @@ pub(super) fn trace(
     false
 }
 
-/// The corrector of one arc step of length `length` from the arc point `ws.arc_xa` at
-/// `t_a`, predicted along `dt_pred ws.arc_dxf`: Newton on the residual and Riks' normal
+/// Lands on `t = to` under strain control from the tangent prediction of the arc point
+/// `x_a` at `t_a`; returns whether Newton converged there.
+#[allow(clippy::too_many_arguments)]
+fn land(
+    problem: &Problem,
+    settings: &Settings,
+    line: StrainLine,
+    t_a: f64,
+    to: f64,
+    trial: &mut State,
+    ws: &mut Workspace,
+    work: &mut Traced,
+) -> bool {
+    let landing = Settings {
+        max_iterations: MAX_LANDING,
+        ..*settings
+    };
+    let trace = &ws.trace;
+    for (x, (xa, dxf)) in trial
+        .unknowns
+        .iter_mut()
+        .zip(trace.xa.iter().zip(&trace.dxf))
+    {
+        *x = xa + (to - t_a) * dxf;
+    }
+    let outcome = newton(
+        problem,
+        &landing,
+        &line.at(to),
+        &mut trial.unknowns,
+        ws,
+        Mode::Newton,
+        false,
+    );
+    work.iterations += ws.residuals.len().saturating_sub(1) as u32;
+    outcome.is_ok()
+}
+
+/// The corrector of one arc step of length `length` from the arc point `ws.trace.xa` at
+/// `t_a`, predicted along `dt_pred ws.trace.dxf`: Newton on the residual and Riks' normal
 /// plane together. Returns the converged `t` (the unknowns are in `trial`), or `None`.
-/// Leaves the predictor direction in `ws.arc_pred`.
+/// Leaves the predictor direction in `ws.trace.pred`.
 #[allow(clippy::too_many_arguments)]
 fn correct(
-    disc: &Discretization,
-    linear: &LinearSolver,
+    problem: &Problem,
     tolerance: f64,
-    eps_at: &impl Fn(f64) -> [f64; 3],
+    line: StrainLine,
     t_a: f64,
     dt_pred: f64,
     length: f64,
@@ -262,49 +251,50 @@ fn correct(
     ws: &mut Workspace,
     work: &mut Traced,
 ) -> Option<f64> {
-    let n = disc.n();
     // Predictor (its direction stays the normal of the constraint plane).
-    ws.arc_pred.copy_from_slice(&ws.arc_dxf);
-    for i in 0..n {
-        trial.unknowns[i] = ws.arc_xa[i] + dt_pred * ws.arc_dxf[i];
+    ws.trace.pred.copy_from_slice(&ws.trace.dxf);
+    for (x, (xa, p)) in trial
+        .unknowns
+        .iter_mut()
+        .zip(ws.trace.xa.iter().zip(&ws.trace.pred))
+    {
+        *x = xa + dt_pred * p;
     }
     let mut t = t_a + dt_pred;
     for _ in 0..MAX_CORRECTOR {
-        evaluate_current(
-            disc,
-            &trial.unknowns,
-            &eps_at(t),
-            TangentKind::Consistent,
-            ws,
-        );
-        let rnorm = dot(&ws.r, &ws.r).sqrt();
+        problem.evaluate(&trial.unknowns, &line.at(t), TangentKind::Consistent, ws);
+        let rnorm = dot(&ws.current.r, &ws.current.r).sqrt();
         if !rnorm.is_finite() {
             return None;
         }
         if rnorm <= tolerance {
             return Some(t);
         }
-        factorize_current(disc, linear, ws).ok()?;
+        problem.factorize(ws, true).ok()?;
         work.iterations += 1;
-        // dx_R into ws.dx, dx_f into ws.arc_dxf (both with this factorization).
-        ws.dx.iter_mut().zip(&ws.r).for_each(|(d, r)| *d = -r);
-        linear.solve_in_place(&mut ws.factor, &mut ws.dx, 1, MemStack::new(&mut ws.stack));
-        load_direction(linear, ws);
+        // dx_R into ws.dx, dx_f into ws.trace.dxf (both with this factorization).
+        ws.dx
+            .iter_mut()
+            .zip(&ws.current.r)
+            .for_each(|(d, r)| *d = -r);
+        ws.factorization.solve(problem.linear, &mut ws.dx, 1);
+        load_direction(problem, ws);
         // Riks' normal plane: ((x - x_a) + dx_R + dt dx_f) . p = length^2, with p the
         // predictor step: linear in dt, so always solvable (a circle may miss the
         // linearized path at a kink of the law).
         let (mut cur_p, mut dxf_p) = (0.0, 0.0);
-        for i in 0..n {
-            let p = dt_pred * ws.arc_pred[i];
-            cur_p += (trial.unknowns[i] - ws.arc_xa[i] + ws.dx[i]) * p;
-            dxf_p += ws.arc_dxf[i] * p;
+        let trace = &ws.trace;
+        for i in 0..trace.xa.len() {
+            let p = dt_pred * trace.pred[i];
+            cur_p += (trial.unknowns[i] - trace.xa[i] + ws.dx[i]) * p;
+            dxf_p += trace.dxf[i] * p;
         }
         if dxf_p == 0.0 || !dxf_p.is_finite() {
             return None;
         }
         let dt = (length * length - cur_p) / dxf_p;
-        for i in 0..n {
-            trial.unknowns[i] += ws.dx[i] + dt * ws.arc_dxf[i];
+        for (x, (d, f)) in trial.unknowns.iter_mut().zip(ws.dx.iter().zip(&trace.dxf)) {
+            *x += d + dt * f;
         }
         t += dt;
     }

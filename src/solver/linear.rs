@@ -3,20 +3,18 @@
 //! analyses once per model; numeric factors in reusable buffers.
 //!
 //! Why this chain: before the peak of the cohesive law, on unloading and in contact, the
-//! RVE tangent is symmetric positive definite, and LL^T is 4-8 times faster than LU here
-//! (see TOOLCHAIN.md). After the peak the tangent can be indefinite and the minimal BC is
-//! a saddle point. faer's LL^T *reports* a non-positive pivot (`LltError`), so a failed
-//! LL^T is a reliable signal to leave it.
+//! RVE tangent is symmetric positive definite, and LL^T is several times faster than LU
+//! here. After the peak the tangent can be indefinite and the minimal BC is a saddle
+//! point. faer's LL^T *reports* a non-positive pivot (`LltError`), so a failed LL^T is a
+//! reliable signal to leave it.
 //!
 //! The next try is faer's intranode LBL^T (Bunch-Kaufman pivoting inside each supernode),
 //! on the same AMD analysis as LL^T, forced supernodal (a simplicial LBL^T does not pivot
-//! and can return NaN silently, TOOLCHAIN.md). Pivoting limited to a supernode is not
-//! backward stable in general, and it reports nothing, so every LBL^T is *checked*: a
-//! probe `b = A p` with a fixed vector `p` is solved with the new factors, and the factors
-//! are kept only if the residual `||b - A p^||` is below [`PROBE_TOLERANCE`] `||b||` (cost:
-//! one product and one solve). Measured with `rve run scenes/paper_rve_fine.toml`: the
-//! five post-peak increments took 590 ms instead of 1419 ms with LU, same results to
-//! 4e-14 and same iterations.
+//! and can return NaN silently). Pivoting limited to a supernode is not backward stable in
+//! general, and it reports nothing, so every LBL^T is *checked*: a probe `b = A p` with a
+//! fixed vector `p` is solved with the new factors, and the factors are kept only if the
+//! residual `||b - A p^||` is below [`PROBE_TOLERANCE`] `||b||` (cost: one product and one
+//! solve).
 //!
 //! LU (COLAMD, partial pivoting) is the last resort, robust for any regular matrix. The
 //! numeric factorizations write into buffers that keep their size between calls: no
@@ -25,11 +23,10 @@
 //!
 //! LL^T and LBL^T call faer's supernodal numeric kernels directly, on the lower triangle
 //! of the AMD-permuted matrix, gathered through a map computed once per model
-//! ([`PermutedLower`]). faer's `SymbolicCholesky::factorize_numeric_*` would permute the
-//! matrix again at every factorization (a counting sort of the whole pattern): measured
-//! on the fine RVE's tangent, 10.2 ms against 8.5 ms for the kernel alone (paper RVE:
-//! 0.57 against 0.49 ms). The gather takes the same entries faer's permutation takes (the
-//! original lower triangle), so the factors are bit-identical.
+//! ([`PermutedLower`]): faer's `SymbolicCholesky::factorize_numeric_*` would permute the
+//! matrix again at every factorization (a counting sort of the whole pattern). The gather
+//! takes the same entries faer's permutation takes (the original lower triangle), so the
+//! factors are bit-identical. Timings of the chain are in `docs/solver.md`.
 
 use faer::dyn_stack::{MemStack, StackReq};
 use faer::perm::PermRef;

@@ -1,9 +1,24 @@
-//! Solution of the RVE equilibrium problem: sparse LU, Newton-Raphson with line search,
-//! sub-stepping of the macro strain increment, and the consistent homogenized tangent.
+//! Solution of the RVE equilibrium problem at a macro strain: the problem's residual and
+//! tangent (`problem`), sparse factorizations (`linear`), the predictor, the Newton kernel,
+//! path following (`arclength`), the condensed tangent, and the sub-stepping driver with
+//! its remedy ladder (`increment`) above them. The per-thread `workspace` holds every
+//! buffer, so a solve allocates nothing.
+//!
+//! Dependencies inside: `increment -> {predictor, newton, arclength, tangent}`,
+//! `arclength -> newton`, and all of them `-> problem -> {linear, workspace, settings}`.
 
 mod arclength;
+mod increment;
 mod linear;
 mod newton;
+mod predictor;
+mod problem;
+mod settings;
+mod tangent;
+mod workspace;
 
+pub use increment::{solve_increment, Solved};
 pub use linear::{FactorKind, LinearSolver, NumericFactor};
-pub use newton::{solve_increment, IncrementReport, Problem, TangentRequest};
+pub use problem::{Problem, Strain};
+pub use settings::{IncrementReport, Settings, TangentRequest};
+pub use workspace::{Factorization, Workspace};

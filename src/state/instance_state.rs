@@ -3,8 +3,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::interface::CohesiveHistory;
-
 /// Converged (or trial) state of one RVE instance.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct State {
@@ -12,10 +10,9 @@ pub struct State {
     pub strain: [f64; 3],
     /// Unknowns: reduced fluctuation dofs, then the multipliers of the minimal BC.
     pub unknowns: Vec<f64>,
-    /// `delta_max` per interface quadrature point, element-major (`t_max` follows from it,
-    /// see [`CohesiveHistory`]).
-    #[serde(with = "history_serde")]
-    pub history: Vec<CohesiveHistory>,
+    /// The interface history: the interface law's values per quadrature point, points
+    /// element-major (for the paper's law, `delta_max` per point).
+    pub history: Vec<f64>,
     /// Fluctuation sensitivity `X = dx/d eps = -K^-1 G` at this state, kept to predict
     /// the next increment (see [`Sensitivity`]).
     pub sensitivity: Sensitivity,
@@ -192,7 +189,7 @@ impl State {
         State {
             strain: [0.0; 3],
             unknowns: vec![0.0; n_unknowns],
-            history: vec![CohesiveHistory::default(); n_history],
+            history: vec![0.0; n_history],
             sensitivity: Sensitivity::empty(),
             curvature: PathCurvature::empty(),
         }
@@ -215,29 +212,9 @@ impl State {
     pub fn bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.unknowns.capacity() * std::mem::size_of::<f64>()
-            + self.history.capacity() * std::mem::size_of::<CohesiveHistory>()
+            + self.history.capacity() * std::mem::size_of::<f64>()
             + self.sensitivity.data.bytes()
             + self.curvature.data.bytes()
-    }
-}
-
-/// History as a flat list of `delta_max` (the kernel type has no serde derive).
-mod history_serde {
-    use serde::{Deserialize, Deserializer, Serialize, Serializer};
-
-    use crate::interface::CohesiveHistory;
-
-    pub fn serialize<S: Serializer>(h: &[CohesiveHistory], s: S) -> Result<S::Ok, S::Error> {
-        let flat: Vec<f64> = h.iter().map(|p| p.delta_max).collect();
-        flat.serialize(s)
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<CohesiveHistory>, D::Error> {
-        let flat = Vec::<f64>::deserialize(d)?;
-        Ok(flat
-            .into_iter()
-            .map(|delta_max| CohesiveHistory { delta_max })
-            .collect())
     }
 }
 
@@ -261,7 +238,7 @@ impl From<StateFormat1> for State {
             history: old
                 .history
                 .into_iter()
-                .map(|[delta_max, _t_max]| CohesiveHistory { delta_max })
+                .map(|[delta_max, _t_max]| delta_max)
                 .collect(),
         }
     }
@@ -273,8 +250,7 @@ impl From<StateFormat1> for State {
 pub struct StateFormat2 {
     pub strain: [f64; 3],
     pub unknowns: Vec<f64>,
-    #[serde(with = "history_serde")]
-    pub history: Vec<CohesiveHistory>,
+    pub history: Vec<f64>,
 }
 
 impl From<StateFormat2> for State {
@@ -296,8 +272,7 @@ impl From<StateFormat2> for State {
 pub struct StateFormat3 {
     pub strain: [f64; 3],
     pub unknowns: Vec<f64>,
-    #[serde(with = "history_serde")]
-    pub history: Vec<CohesiveHistory>,
+    pub history: Vec<f64>,
     pub sensitivity: SensitivityFormat3,
 }
 
@@ -326,8 +301,7 @@ impl From<StateFormat3> for State {
 pub struct StateFormat4 {
     pub strain: [f64; 3],
     pub unknowns: Vec<f64>,
-    #[serde(with = "history_serde")]
-    pub history: Vec<CohesiveHistory>,
+    pub history: Vec<f64>,
     pub sensitivity: Sensitivity,
 }
 

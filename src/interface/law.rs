@@ -1,0 +1,80 @@
+//! The seam between the interface element and its constitutive law.
+//!
+//! A law sees one quadrature point at a time, in the local axes of the element (`s`
+//! sliding, `n` normal, `delta_n > 0` opening), and declares the size of its history per
+//! point ([`InterfaceLaw::history_len`], pmsim's `n_int_vars`): the element and the solver
+//! keep the history as one flat `f64` slice, element-major then point-major, and never
+//! read a law's parameters. A new law is one file in this folder implementing the trait,
+//! plus its registration where the model translates the scene (`model::from_scene`).
+
+use nalgebra::{Matrix2, Vector2};
+
+/// Which matrix a law returns with its traction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TangentKind {
+    /// The consistent tangent `dt/d delta` (eqs. 45-47 for the paper's law).
+    #[default]
+    Consistent,
+    /// A secant matrix `S` with `t = S delta`, positive definite: for the secant
+    /// iterations of the solver.
+    Secant,
+}
+
+/// Which branch of its law a point is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Branch {
+    /// The history advances (the loading envelope, eq. 23).
+    Loading,
+    /// A reversible branch with the history unchanged (unloading to the origin, eq. 24;
+    /// every point of a law without history).
+    Unloading,
+    /// Contact of a closed point (eqs. 36-37).
+    Contact,
+}
+
+/// The response of a law at one point for a trial jump.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LawPoint {
+    /// Local traction `[t_s, t_n]`.
+    pub traction: Vector2<f64>,
+    /// The matrix of the requested [`TangentKind`], symmetric.
+    pub matrix: Matrix2<f64>,
+    pub branch: Branch,
+}
+
+/// A traction-separation law of a zero-thickness interface.
+pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
+    /// Internal variables per quadrature point.
+    fn history_len(&self) -> usize;
+
+    /// The traction and matrix at the local jump `[delta_s, delta_n]` from the committed
+    /// history `committed` of the point; writes the point's trial history into `trial`
+    /// (both of [`InterfaceLaw::history_len`] values). `length` is the element's reference
+    /// length. Pure and allocation free; non-finite jumps give non-finite tractions.
+    fn respond(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        length: f64,
+        kind: TangentKind,
+    ) -> LawPoint;
+
+    /// Whether a point whose history goes from `start` to `trial` within a step passes
+    /// the peak of its strength there: the solver then refuses the tangent predictor,
+    /// which would carry it past a limit point of the RVE on the pre-peak branch.
+    fn passes_peak(&self, _start: &[f64], _trial: &[f64]) -> bool {
+        false
+    }
+
+    /// Whether a history read from a checkpoint is admissible for this law.
+    fn history_is_valid(&self, history: &[f64]) -> bool {
+        history.iter().all(|v| v.is_finite())
+    }
+
+    /// Something to add to the message of a failed solve whose last iterate has
+    /// `closed_points` points in contact, if the law knows why that may fail.
+    fn failure_hint(&self, _closed_points: usize) -> Option<String> {
+        None
+    }
+}

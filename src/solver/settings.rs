@@ -1,0 +1,60 @@
+//! The solver's own settings and the types of its API: what a caller asks for and what an
+//! update reports. The scene's `[solver]` table is translated into [`Settings`] by `model`.
+
+/// Settings of the RVE equilibrium solve (see `increment` for the remedy ladder they
+/// switch on and off).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Newton converges when `||R|| <= tolerance * max(||G eps||, 1e-8 ||G||)`.
+    pub tolerance: f64,
+    /// Newton iterations per attempt.
+    pub max_iterations: u32,
+    /// Backtracking line search on `||R||` when the full step increases it.
+    pub line_search: bool,
+    /// Bisections of the macro strain increment before the update fails.
+    pub max_substep_depth: u32,
+    /// Trace the equilibrium path through limit points when Newton fails on a step.
+    pub path_following: bool,
+    /// Iterations of the secant-then-Newton remedy; 0 switches it off.
+    pub max_secant_iterations: u32,
+    /// Chord corrections after a hundredfold Newton contraction (see `newton`).
+    pub reuse_factorization: bool,
+    /// The second-order term of the predictor (see `predictor`).
+    pub second_order_predictor: bool,
+}
+
+/// What tangent the caller wants back.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TangentRequest {
+    /// The consistent homogenized tangent (eq. 18).
+    #[default]
+    Consistent,
+    /// No tangent: stress only (skips the tangent solve).
+    None,
+}
+
+/// Counters of one update.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IncrementReport {
+    /// Newton corrections summed over sub-steps.
+    pub iterations: u32,
+    /// Accepted sub-steps (1 when the increment converged in one go).
+    pub substeps: u32,
+    /// Numeric factorizations, including any for the tangent.
+    pub factorizations: u32,
+    /// How many of them were LU (indefinite tangent, the checked LBL^T refused).
+    pub lu_factorizations: u32,
+    /// How many were the checked LBL^T (indefinite tangent); the rest were LL^T.
+    pub lblt_factorizations: u32,
+    /// Limit points of the macro strain along the equilibrium paths traced by path
+    /// following in this update (a snap-back of the RVE response counts two: the strain
+    /// passes a maximum, then a minimum). Non-zero means the strain-controlled equilibrium
+    /// is not continuous over the increment: the RVE snapped back (a material instability
+    /// at this point of the host), and no strain-controlled Newton loop can be expected to
+    /// converge in a few iterations there.
+    pub limit_points: u32,
+    /// Interface points on the loading / unloading / contact branch at the end.
+    pub loading: usize,
+    pub unloading: usize,
+    pub contact: usize,
+}
