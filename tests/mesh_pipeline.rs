@@ -5,7 +5,8 @@ mod common;
 
 use std::collections::HashSet;
 
-use rve::mesh::{build_microstructure, Mesh, MeshStats, Phase};
+use rve::mesh::{Mesh, MeshStats, Phase};
+use rve::model::build_microstructure;
 use rve::scene::Scene;
 
 fn centroid(mesh: &Mesh, nodes: [usize; 3]) -> [f64; 2] {

@@ -2,7 +2,7 @@
 
 mod common;
 
-use rve::mesh::build_microstructure;
+use rve::model::build_microstructure;
 use rve::scene::Scene;
 
 /// Parses (and meshes, if parsing succeeds) a variation of the paper scene and returns

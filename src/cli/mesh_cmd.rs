@@ -11,7 +11,8 @@ use serde::Serialize;
 use super::load_scene;
 use crate::error::{Error, Result};
 use crate::io::{write_svg, write_vtu};
-use crate::mesh::{build_microstructure, MeshStats};
+use crate::mesh::MeshStats;
+use crate::model::build_microstructure;
 
 #[derive(Args, Debug)]
 pub struct MeshArgs {

@@ -3,6 +3,8 @@
 mod placement;
 pub mod polygon;
 mod shape;
+mod spec;
 
 pub use placement::{build_inclusions, place_random, Placement};
 pub use shape::Inclusion;
+pub use spec::{Explicit, ExplicitInclusion, Orientation, RandomSpec, RandomWord, ShapeKind};

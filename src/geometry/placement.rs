@@ -20,8 +20,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::shape::Inclusion;
+use super::spec::{Explicit, Orientation, RandomSpec, ShapeKind};
 use crate::error::{Error, Result};
-use crate::scene::{Explicit, Orientation, RandomSpec, ShapeKind};
 
 /// A placed microstructure.
 #[derive(Clone, Debug, serde::Serialize)]

@@ -1,7 +1,6 @@
 //! Meshes: the data model, triangulation of a microstructure, Gmsh import, ITZ insertion.
 
 mod boundary;
-mod build;
 pub mod gmsh;
 mod itz;
 mod model;
@@ -9,8 +8,9 @@ mod stats;
 mod triangulate;
 
 pub use boundary::{find_boundary_nodes, find_boundary_nodes_split};
-pub use build::{build_microstructure, Microstructure};
 pub use itz::{insert_itz, without_itz};
-pub use model::{BoundaryNodes, InterfaceElement, Mesh, Phase, PhaseMesh, Triangle};
+pub use model::{
+    BoundaryNodes, InterfaceElement, Mesh, Microstructure, Phase, PhaseMesh, Triangle,
+};
 pub use stats::{triangle_angles_deg, MeshStats};
 pub use triangulate::{triangulate, triangulate_straight_interface};

@@ -110,3 +110,17 @@ pub struct PhaseMesh {
     /// Counter-clockwise triangles with their phase.
     pub triangles: Vec<Triangle>,
 }
+
+/// The mesh of a scene and the geometry it came from.
+#[derive(Clone, Debug)]
+pub struct Microstructure {
+    pub mesh: Mesh,
+    /// Exact inclusion shapes (empty for Gmsh meshes, homogeneous cells and the straight
+    /// interface).
+    pub inclusions: Vec<crate::geometry::Inclusion>,
+    /// Exact inclusion area over cell area, before discretisation (None for Gmsh; for the
+    /// straight interface the part left of it).
+    pub geometric_area_fraction: Option<f64>,
+    /// Random placement rounds used (None unless random).
+    pub placement_rounds: Option<u32>,
+}

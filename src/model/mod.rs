@@ -4,7 +4,9 @@
 
 mod from_scene;
 mod instance;
+mod microstructure;
 mod rve_model;
 
 pub use instance::Instance;
+pub use microstructure::build_microstructure;
 pub use rve_model::{Model, Response, MAX_STRAIN};

@@ -4,11 +4,12 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::from_scene::{boundary_condition, interface_law, solver_settings};
+use super::microstructure::build_microstructure;
 use crate::assembly::{Discretization, DiscretizationSpec};
 use crate::constraint::BoundaryCondition;
 use crate::error::{Error, Result};
 use crate::homogenization::Homogenizer;
-use crate::mesh::{build_microstructure, Mesh, Microstructure};
+use crate::mesh::{Mesh, Microstructure};
 use crate::scene::Scene;
 use crate::solver::{
     solve_increment, IncrementReport, LinearSolver, Problem, Settings, TangentRequest, Workspace,

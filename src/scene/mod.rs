@@ -5,10 +5,10 @@ mod load;
 mod schema;
 mod validate;
 
+pub use crate::geometry::{Explicit, ExplicitInclusion, Orientation, RandomSpec, ShapeKind};
 pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
 pub use schema::{
-    BoundaryKind, BoundarySpec, CellSpec, EffectsSpec, ElasticSpec, Explicit, ExplicitInclusion,
-    GeometrySpec, GmshSpec, InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec,
-    MeshSpec, Orientation, PathSegment, PenaltySpec, RandomSpec, SceneSpec, ShapeKind, SolverSpec,
-    StraightInterfaceSpec,
+    BoundaryKind, BoundarySpec, CellSpec, EffectsSpec, ElasticSpec, GeometrySpec, GmshSpec,
+    InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec, MeshSpec, PathSegment,
+    PenaltySpec, SceneSpec, SolverSpec, StraightInterfaceSpec,
 };

@@ -2,6 +2,7 @@
 
 use super::schema::*;
 use crate::error::{Error, Result};
+use crate::geometry::{Explicit, Orientation, RandomSpec, ShapeKind};
 
 /// Densest random packing we attempt; above it random sequential placement jams.
 pub const MAX_AREA_FRACTION: f64 = 0.7;

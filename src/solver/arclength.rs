@@ -32,7 +32,7 @@
 use super::newton::{newton, Mode};
 use super::problem::{dot, Problem, Strain};
 use super::settings::Settings;
-use super::workspace::Workspace;
+use super::workspace::{TraceBuffers, Workspace};
 use crate::interface::TangentKind;
 use crate::state::State;
 
@@ -122,13 +122,8 @@ pub(super) fn trace(
     for _ in 0..MAX_POINTS {
         ws.history_start.copy_from_slice(&trial.history);
         ws.trace.xa.copy_from_slice(&trial.unknowns);
-        if !direction_ready {
-            // Tangent at the arc point: K dx_f = -f.
-            problem.evaluate(&trial.unknowns, &line.at(t_a), TangentKind::Consistent, ws);
-            if problem.factorize(ws, true).is_err() {
-                return false;
-            }
-            load_direction(problem, ws);
+        if !direction_ready && !tangent_at(problem, &line.at(t_a), trial, ws) {
+            return false;
         }
         let dxf_norm = dot(&ws.trace.dxf, &ws.trace.dxf).sqrt();
         if !(dxf_norm.is_finite() && dxf_norm > 0.0) {
@@ -139,31 +134,16 @@ pub(super) fn trace(
             length = (to - from) * dxf_norm / 8.0;
             first_length = length;
         }
-        // Direction: keep going the way the path went (positive t at the start).
-        let sign = if work.points == 0 || dot(&ws.trace.dxf, &ws.trace.prev) >= 0.0 {
-            1.0
-        } else {
-            -1.0
-        };
-        let dt_pred = sign * length / dxf_norm;
+        let dt_pred = direction(work.points, &ws.trace) * length / dxf_norm;
         let converged = if t_a + dt_pred >= to {
             if land(problem, settings, line, t_a, to, trial, ws, work) {
                 return true;
             }
-            false
+            false // a failed landing leaves `dxf` alone
         } else if let Some(t) = correct(
             problem, tolerance, line, t_a, dt_pred, length, trial, ws, work,
         ) {
-            for (p, (x, xa)) in ws
-                .trace
-                .prev
-                .iter_mut()
-                .zip(trial.unknowns.iter().zip(&ws.trace.xa))
-            {
-                *p = x - xa;
-            }
-            trial.history.copy_from_slice(&ws.current.history);
-            trial.strain = line.at(t);
+            accept_point(&line.at(t), trial, ws);
             let forward = t > t_a;
             if forward != going_forward {
                 work.limit_points += 1;
@@ -195,6 +175,42 @@ pub(super) fn trace(
         }
     }
     false
+}
+
+/// The sign of the next arc step along `dxf`: keep going the way the path went (positive
+/// `t` at the first point).
+fn direction(points: u32, trace: &TraceBuffers) -> f64 {
+    if points == 0 || dot(&trace.dxf, &trace.prev) >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+/// The path direction at the arc point `trial` (strain `strain`): `K dx_f = -f` with a
+/// fresh factorization; false if `K` is singular.
+fn tangent_at(problem: &Problem, strain: &Strain, trial: &State, ws: &mut Workspace) -> bool {
+    problem.evaluate(&trial.unknowns, strain, TangentKind::Consistent, ws);
+    if problem.factorize(ws, true).is_err() {
+        return false;
+    }
+    load_direction(problem, ws);
+    true
+}
+
+/// Commits the converged arc point (at `strain`) into `trial`, as a sub-step would, and
+/// keeps the step from the last point for the direction test.
+fn accept_point(strain: &Strain, trial: &mut State, ws: &mut Workspace) {
+    let trace = &mut ws.trace;
+    for (p, (x, xa)) in trace
+        .prev
+        .iter_mut()
+        .zip(trial.unknowns.iter().zip(&trace.xa))
+    {
+        *p = x - xa;
+    }
+    trial.history.copy_from_slice(&ws.current.history);
+    trial.strain = *strain;
 }
 
 /// Lands on `t = to` under strain control from the tangent prediction of the arc point

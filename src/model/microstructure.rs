@@ -2,27 +2,14 @@
 
 use std::path::Path;
 
-use super::gmsh::read_msh;
-use super::itz::{insert_itz, without_itz};
-use super::model::{Mesh, PhaseMesh};
-use super::triangulate::{triangulate, triangulate_straight_interface};
 use crate::error::{Error, Result};
 use crate::geometry::{build_inclusions, place_random, Inclusion};
+use crate::mesh::gmsh::read_msh;
+use crate::mesh::{
+    insert_itz, triangulate, triangulate_straight_interface, without_itz, Mesh, Microstructure,
+    PhaseMesh,
+};
 use crate::scene::{GeometrySpec, Scene};
-
-/// The mesh of a scene and the geometry it came from.
-#[derive(Clone, Debug)]
-pub struct Microstructure {
-    pub mesh: Mesh,
-    /// Exact inclusion shapes (empty for Gmsh meshes, homogeneous cells and the straight
-    /// interface).
-    pub inclusions: Vec<Inclusion>,
-    /// Exact inclusion area over cell area, before discretisation (None for Gmsh; for the
-    /// straight interface the part left of it).
-    pub geometric_area_fraction: Option<f64>,
-    /// Random placement rounds used (None unless random).
-    pub placement_rounds: Option<u32>,
-}
 
 /// Builds the mesh that `scene` describes.
 pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
