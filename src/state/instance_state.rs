@@ -102,16 +102,13 @@ impl Quantized {
 /// [`Quantized`]. It only seeds the next increment's Newton loop
 /// (`x_0 = x_n + X_n Delta eps`, a first-order predictor), where a relative error of
 /// 0.4 % of the block's largest entry is of the order of the predictor's own
-/// `O(Delta eps^2)` error: on the paper path every increment takes the iterations and
-/// factorizations it took with the 16-bit, per-column `X` of format 3, and on the section
-/// 5.2.2 cycle one increment takes one more iteration (not one more factorization).
-/// Blocks matter after the peak, where the largest entries sit at the crack: one scale per
-/// column made the post-snap increment of the cycle take 7 iterations instead of 2. It
-/// costs 3.1 bytes per unknown instead of 24 (6 in format 3), and nothing until a
-/// converged update with a tangent has filled it (`valid` false, no buffers: the virgin
-/// state uses the model's elastic predictor). An update without tangent keeps the one of
-/// the state it started from, which the predictor's residual check then guards like any
-/// other prediction. (Serialized exactly as format 4's flat `valid, scales, values`.)
+/// `O(Delta eps^2)` error. Blocks matter after the peak, where the largest entries sit at
+/// the crack (measurements in `docs/solver.md`). It costs 3.1 bytes per unknown, and
+/// nothing until a converged update with a tangent has filled it (`valid` false, no
+/// buffers: the virgin state uses the model's elastic predictor). An update without
+/// tangent keeps the one of the state it started from, which the predictor's residual
+/// check then guards like any other prediction. (Serialized exactly as format 4's flat
+/// `valid, scales, values`.)
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Sensitivity {
     pub valid: bool,
@@ -148,7 +145,7 @@ impl Sensitivity {
 /// second-order term `x''[Delta eps, Delta eps] / 2` of the fluctuation path `x(eps)` (the
 /// first-order one is the sensitivity's). On a path whose next step `Delta eps = s Delta
 /// eps_{n-1}` keeps the direction, `x_{n+1} ~ x_n + X_n Delta eps + s^2 e` predicts to
-/// third order (see `solver::newton`'s module docs). Kept only after an increment that
+/// third order (see `solver::predictor`'s module docs). Kept only after an increment that
 /// started from the tangent predictor and converged in one Newton loop (`valid` false
 /// otherwise), stored [`Quantized`] (1.1 bytes per unknown), allocated by the first
 /// increment that fills it.
