@@ -39,7 +39,7 @@ use crate::state::State;
 pub struct Solved {
     pub report: IncrementReport,
     /// `G^T K^-1 G` (row-major) at the converged state when the tangent was requested,
-    /// zeros otherwise: `homogenization` forms `D_hom` from it (eq. 18).
+    /// zeros otherwise: the caller forms `D_hom = D_Taylor - C / V` from it (eq. 18).
     pub condensed: [f64; 9],
 }
 

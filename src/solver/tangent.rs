@@ -1,5 +1,5 @@
 //! The condensed term of the homogenized tangent, `C = G^T K^-1 G` (3 x 3, row-major), at
-//! the converged state: `D_hom = D_Taylor - C / V` (eq. 18, formed by `homogenization`).
+//! the converged state: `D_hom = D_Taylor - C / V` (eq. 18, formed by the caller).
 //!
 //! `K^-1 G` comes from the factorization the Newton loop left (`K_f`):
 //! - if the converged `K` is bitwise the factorized one (unloading, contact, the elastic

@@ -171,7 +171,7 @@ pub(super) struct TraceBuffers {
     pub pred: Vec<f64>,
 }
 
-/// Per-thread scratch for [`crate::model::Model::update`].
+/// Per-thread scratch for the updates of one model (`Model::update`).
 pub struct Workspace {
     /// The evaluation at the current iterate, and a candidate (line search, predictor).
     pub(super) current: Evaluation,
