@@ -9,7 +9,6 @@
 //! with `scene` describing everything and `geometry` producing microstructures.
 
 pub mod assembly;
-pub mod cli;
 pub mod constraint;
 pub mod element;
 pub mod error;

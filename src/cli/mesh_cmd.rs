@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
+use rve::error::{Error, Result};
+use rve::io::{write_svg, write_vtu};
+use rve::mesh::{build_microstructure, MeshStats};
 use serde::Serialize;
 
 use super::load_scene;
-use crate::error::{Error, Result};
-use crate::io::{write_svg, write_vtu};
-use crate::mesh::{build_microstructure, MeshStats};
 
 #[derive(Args, Debug)]
 pub struct MeshArgs {

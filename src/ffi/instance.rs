@@ -465,7 +465,7 @@ pub unsafe extern "C" fn rve_path_len(h: RveHandle, n: *mut usize) -> u32 {
     guard("rve_path_len", || {
         let n = out(n, "n")?;
         let entry = registry::get(h)?;
-        *n = crate::cli::path_points(&entry.model.scene.spec.path).len();
+        *n = crate::scene::path_points(&entry.model.scene.spec.path).len();
         Ok(())
     }) as u32
 }
@@ -483,7 +483,7 @@ pub unsafe extern "C" fn rve_path_point(h: RveHandle, i: usize, strain: *mut f64
     guard("rve_path_point", || {
         let strain = slice_mut(strain, 3, "strain")?;
         let entry = registry::get(h)?;
-        let points = crate::cli::path_points(&entry.model.scene.spec.path);
+        let points = crate::scene::path_points(&entry.model.scene.spec.path);
         let p = points.get(i).ok_or_else(|| {
             Failure::new(
                 RveStatus::InvalidArgument,

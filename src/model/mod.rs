@@ -5,4 +5,4 @@ mod instance;
 mod rve_model;
 
 pub use instance::Instance;
-pub use rve_model::{Model, Response, MAX_STRAIN};
+pub use rve_model::{Model, Response};

@@ -9,13 +9,9 @@ use crate::homogenization::Homogenizer;
 use crate::interface::{CohesiveLaw, Penalty};
 use crate::mesh::{build_microstructure, Mesh, Microstructure};
 use crate::scene::BoundaryKind;
-use crate::scene::{Scene, SolverSpec};
+use crate::scene::{Scene, SolverSpec, MAX_STRAIN};
 use crate::solver::{solve_increment, IncrementReport, LinearSolver, Problem, TangentRequest};
 use crate::state::{State, Workspace};
-
-/// Largest strain component accepted: 10 %, a hundred times the strains at which concrete
-/// fails; beyond it a small-strain RVE makes no sense and the input is taken as absurd.
-pub const MAX_STRAIN: f64 = 0.1;
 
 static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(1);
 
