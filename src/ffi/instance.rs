@@ -1,5 +1,6 @@
 //! The material-point entry points: init, update, commit, revert, reset, free, state
-//! save/load and the scene's strain path.
+//! save/load and the scene's strain path. Each translates its arguments and calls the
+//! `model::Instance` behind the handle (trial/commit, checkpoint bytes) or its model.
 
 use std::ffi::{c_char, CStr};
 use std::path::Path;
@@ -8,7 +9,6 @@ use std::sync::Arc;
 use super::boundary::{guard, out, slice, slice_mut, Failure, FfiResult};
 use super::cache;
 use super::registry::{self, Entry};
-use super::state_io;
 use super::status::RveStatus;
 use super::workspace::with_workspace;
 use crate::model::{Instance, Model, Response};
@@ -372,7 +372,8 @@ pub extern "C" fn rve_free(h: RveHandle) -> u32 {
 }
 
 /// Writes to `*size` the number of bytes `rve_state_save` needs for the instance's
-/// committed state (the same for every state of one scene). Returns `OK`,
+/// committed state. It depends on the state (the first updates with a tangent add the
+/// predictor's sensitivity and path curvature): query it before each save. Returns `OK`,
 /// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`; `*size` written on success.
 ///
 /// # Safety
@@ -383,8 +384,7 @@ pub unsafe extern "C" fn rve_state_size(h: RveHandle, size: *mut usize) -> u32 {
     guard("rve_state_size", || {
         let size = out(size, "size")?;
         let entry = registry::get(h)?;
-        let instance = entry.lock()?;
-        *size = state_io::encoded_len(instance.committed())?;
+        *size = entry.lock()?.state_size()?;
         Ok(())
     }) as u32
 }
@@ -409,10 +409,7 @@ pub unsafe extern "C" fn rve_state_save(
     guard("rve_state_save", || {
         let written = out(written, "written")?;
         let entry = registry::get(h)?;
-        let bytes = {
-            let instance = entry.lock()?;
-            state_io::encode(&entry.model, instance.committed())?
-        };
+        let bytes = entry.lock()?.save_state()?;
         if bytes.len() > len {
             *written = bytes.len();
             return Err(Failure::new(
@@ -443,8 +440,7 @@ pub unsafe extern "C" fn rve_state_load(h: RveHandle, buf: *const u8, len: usize
     guard("rve_state_load", || {
         let bytes = slice(buf, len, "buf")?;
         let entry = registry::get(h)?;
-        let state = state_io::decode(&entry.model, bytes)?;
-        entry.lock()?.restore(state);
+        entry.lock()?.load_state(bytes)?;
         Ok(())
     }) as u32
 }

@@ -12,11 +12,11 @@ mod boundary;
 mod cache;
 mod instance;
 mod registry;
-mod state_io;
 mod status;
 mod version;
 mod workspace;
 
+pub use crate::state::STATE_FORMAT_VERSION;
 pub use batch::rve_update_batch;
 pub use boundary::rve_last_error;
 pub use cache::model_builds;
@@ -27,7 +27,6 @@ pub use instance::{
     RveTangentRequest,
 };
 pub use registry::live_instances;
-pub use state_io::STATE_FORMAT_VERSION;
 pub use status::{rve_status_message, RveStatus, ALL_STATUSES};
 pub use version::{rve_abi_version, rve_version, rve_version_number};
 

@@ -1,12 +1,14 @@
 //! One material point: the committed state plus the last trial, over a shared model. The
 //! one trial/commit lifecycle of the crate: `rve run`, the tests and the C interface (one
-//! `Instance` behind each handle) all go through it.
+//! `Instance` behind each handle) all go through it, and so does checkpointing (the bytes
+//! of [`crate::state::persist`]).
 
 use std::sync::Arc;
 
 use super::rve_model::{Model, Response};
 use crate::error::{Error, Result};
 use crate::solver::TangentRequest;
+use crate::state::persist::{self, StateSizes};
 use crate::state::{State, Workspace};
 
 /// An RVE instance: what a host keeps per integration point.
@@ -96,11 +98,36 @@ impl Instance {
         self.has_trial = false;
     }
 
-    /// Replaces the committed state (checked by the caller against this model) and
-    /// discards the trial.
-    pub(crate) fn restore(&mut self, state: State) {
-        self.committed = state;
+    /// The sizes the model's states have, as recorded in the state bytes.
+    fn sizes(&self) -> StateSizes {
+        StateSizes {
+            unknowns: self.model.disc.n(),
+            history: self.model.disc.history_len(),
+        }
+    }
+
+    /// Bytes [`save_state`](Self::save_state) writes now. It depends on the state: the
+    /// first updates with a tangent add the predictor's sensitivity and path curvature
+    /// (see [`State`]).
+    pub fn state_size(&self) -> Result<usize> {
+        persist::encoded_len(&self.committed)
+    }
+
+    /// The committed state (not the trial) as versioned bytes, for checkpoint/restart:
+    /// [`load_state`](Self::load_state) on an instance of the same scene, in this process
+    /// or another, continues bit-identically.
+    pub fn save_state(&self) -> Result<Vec<u8>> {
+        persist::encode(&self.committed, self.sizes())
+    }
+
+    /// Replaces the committed state by the one in `bytes` (from
+    /// [`save_state`](Self::save_state), this format version or an older readable one) and
+    /// discards the trial. Refused with `BadState`, `StateVersion` or `StateMismatch` (a
+    /// model of another scene); a refused load changes nothing, the trial included.
+    pub fn load_state(&mut self, bytes: &[u8]) -> Result<()> {
+        self.committed = persist::decode(bytes, self.sizes())?;
         self.has_trial = false;
+        Ok(())
     }
 
     /// Bytes owned by this instance (committed and, once allocated, trial states).
