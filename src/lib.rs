@@ -4,6 +4,12 @@
 //! effect in brittle materials by a mesoscopic scale approach"; equation numbers in the
 //! doc comments refer to that paper.
 //!
+//! The safe API is [`Model`] (one per scene, shared) and [`Instance`] (one per material
+//! point: the trial/commit lifecycle and checkpoint bytes, see [`state::persist`]); the C
+//! interface in [`ffi`] is a thin translation over it. The command-line tool (`src/cli/`)
+//! is a module of the `rve` binary, not of this library, so `librve.so` does not link
+//! clap.
+//!
 //! Dependencies flow one way:
 //! `ffi -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
 //! with `scene` describing everything and `geometry` producing microstructures.
@@ -26,9 +32,9 @@ pub mod state;
 
 pub use error::{Error, Result};
 pub use model::{Instance, Model, Response};
-pub use scene::Scene;
+pub use scene::{Scene, MAX_STRAIN};
 pub use solver::TangentRequest;
-pub use state::{State, Workspace};
+pub use state::{State, Workspace, STATE_FORMAT_VERSION};
 
 /// The crate version, `major.minor.patch`, as in Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

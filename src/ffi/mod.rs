@@ -1,5 +1,7 @@
 //! The C interface: a thin translation layer over the safe Rust API. This is the only
-//! module with `unsafe` code or `extern "C"` functions.
+//! module with `unsafe` code or `extern "C"` functions. A handle names one
+//! [`crate::Instance`] in a process-wide table (`registry`); the entry points check their
+//! arguments, call its methods and map [`crate::Error`] to an [`RveStatus`].
 //!
 //! Conventions (also in the README and the header): handle first, then inputs, then
 //! outputs; every function returns an `RveStatus` as `uint32_t` (except queries that

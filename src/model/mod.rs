@@ -1,5 +1,6 @@
 //! The safe Rust API: a shared immutable [`Model`] per scene, a small [`Instance`] per
-//! material point, and a per-thread [`crate::state::Workspace`].
+//! material point (its trial/commit lifecycle and its checkpoint bytes), and a per-thread
+//! [`crate::state::Workspace`].
 
 mod instance;
 mod rve_model;
