@@ -233,7 +233,7 @@ module rve
       integer(c_int32_t) :: status
     end function rve_free
 
-    ! Bytes that rve_state_save needs (the same for every state of one scene).
+    ! Bytes that rve_state_save needs now (depends on the state: query before each save).
     function rve_state_size(h, size) bind(c, name="rve_state_size") result(status)
       import :: c_int64_t, c_size_t, c_int32_t
       integer(c_int64_t), value, intent(in) :: h

@@ -265,7 +265,8 @@ uint32_t rve_reset(RveHandle h);
 uint32_t rve_free(RveHandle h);
 
 // Writes to `*size` the number of bytes `rve_state_save` needs for the instance's
-// committed state (the same for every state of one scene). Returns `OK`,
+// committed state. It depends on the state (the first updates with a tangent add the
+// predictor's sensitivity and path curvature): query it before each save. Returns `OK`,
 // `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`; `*size` written on success.
 //
 // # Safety

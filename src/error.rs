@@ -51,6 +51,33 @@ pub enum Error {
     /// `commit` without a successful trial `update` since the last commit/revert.
     #[error("no trial to commit: call update first")]
     NoTrial,
+    /// State bytes are not a mesorve state: another magic, truncated, undecodable, or
+    /// values no state can have.
+    #[error("state bytes: {reason}")]
+    BadState { reason: String },
+    /// State bytes in a format version this library does not read.
+    #[error("state format version {found}; this library reads versions {older:?} and {current}")]
+    StateVersion {
+        found: u32,
+        /// The older versions it reads.
+        older: &'static [u32],
+        /// The version it writes (and reads).
+        current: u32,
+    },
+    /// State bytes of a model of other sizes (another scene).
+    #[error(
+        "state of a model with {saved_unknowns} unknowns and {saved_history} history points; \
+         this instance's model has {unknowns} and {history} (another scene)"
+    )]
+    StateMismatch {
+        saved_unknowns: u64,
+        saved_history: u64,
+        unknowns: u64,
+        history: u64,
+    },
+    /// A state could not be encoded (a bug).
+    #[error("state encoding: {reason}")]
+    StateEncoding { reason: String },
 }
 
 impl Error {

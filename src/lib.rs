@@ -4,12 +4,17 @@
 //! effect in brittle materials by a mesoscopic scale approach"; equation numbers in the
 //! doc comments refer to that paper.
 //!
+//! The safe API is [`Model`] (one per scene, shared) and [`Instance`] (one per material
+//! point: the trial/commit lifecycle and checkpoint bytes, see [`state::persist`]); the C
+//! interface in [`ffi`] is a thin translation over it. The command-line tool (`src/cli/`)
+//! is a module of the `rve` binary, not of this library, so `librve.so` does not link
+//! clap.
+//!
 //! Dependencies flow one way:
 //! `ffi -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
 //! with `scene` describing everything and `geometry` producing microstructures.
 
 pub mod assembly;
-pub mod cli;
 pub mod constraint;
 pub mod element;
 pub mod error;
@@ -27,10 +32,10 @@ pub mod state;
 
 pub use error::{Error, Result};
 pub use model::{Instance, Model, Response};
-pub use scene::Scene;
+pub use scene::{Scene, MAX_STRAIN};
 pub use solver::TangentRequest;
 pub use solver::Workspace;
-pub use state::State;
+pub use state::{State, STATE_FORMAT_VERSION};
 
 /// The crate version, `major.minor.patch`, as in Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -369,7 +369,7 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
 fn path_points_match_the_cli() {
     let h = init_paper();
     let scene = common::scene("scenes/paper_rve.toml");
-    let points = rve::cli::path_points(&scene.spec.path);
+    let points = rve::scene::path_points(&scene.spec.path);
     let mut n = 0;
     assert_eq!(unsafe { rve_path_len(h, &mut n) }, OK);
     assert_eq!(n, points.len());

@@ -54,7 +54,7 @@ fn follow(
     let model = Arc::new(Model::from_scene(&scene).unwrap());
     let mut ws = model.workspace();
     let mut inst = Instance::new(model.clone());
-    rve::cli::path_points(&scene.spec.path)
+    rve::scene::path_points(&scene.spec.path)
         .into_iter()
         .map(|eps| {
             let r = inst

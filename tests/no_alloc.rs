@@ -24,7 +24,7 @@ fn update_and_commit_do_not_allocate() {
     let model = Arc::new(Model::from_scene(&scene).unwrap());
     let mut ws = model.workspace();
     let mut inst = Instance::new(model.clone());
-    let path = rve::cli::path_points(&scene.spec.path);
+    let path = rve::scene::path_points(&scene.spec.path);
     // Warm-up: the first update sizes faer's numeric buffers and the trial's sensitivity,
     // the second the other state's sensitivity and its path curvature, the third the
     // first state's curvature (the states swap on commit).

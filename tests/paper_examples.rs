@@ -54,7 +54,7 @@ fn model(rel: &str, replacements: &[(&str, &str)]) -> Arc<Model> {
 
 /// The strain at every increment of a scene's `[[path]]`.
 fn path_of(rel: &str) -> Vec<[f64; 3]> {
-    rve::cli::path_points(&common::scene(rel).spec.path)
+    rve::scene::path_points(&common::scene(rel).spec.path)
 }
 
 /// One converged increment.

@@ -6,13 +6,13 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
+use rve::error::{Error, Result};
+use rve::io::{write_svg, write_vtu};
+use rve::mesh::MeshStats;
+use rve::model::build_microstructure;
 use serde::Serialize;
 
 use super::load_scene;
-use crate::error::{Error, Result};
-use crate::io::{write_svg, write_vtu};
-use crate::mesh::MeshStats;
-use crate::model::build_microstructure;
 
 #[derive(Args, Debug)]
 pub struct MeshArgs {

@@ -1,16 +1,16 @@
-//! The `rve` command-line tool: argument parsing and the subcommands.
+//! The `rve` command-line tool: argument parsing and the subcommands. A module of the
+//! binary only (declared by `src/main.rs`), so the library, and `librve.so` with it, does
+//! not link clap; it uses the library through its public API (`rve::...`).
 
 mod mesh_cmd;
 mod run_cmd;
-
-pub use run_cmd::{path_points, CSV_HEADER};
 
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
-use crate::error::Result;
-use crate::scene::{Scene, DEFAULT_SCENE_NAME};
+use rve::error::Result;
+use rve::scene::{Scene, DEFAULT_SCENE_NAME};
 
 #[derive(Parser, Debug)]
 #[command(

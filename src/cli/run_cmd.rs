@@ -7,11 +7,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
+use rve::error::{Error, Result};
+use rve::scene::path_points;
+use rve::{Instance, Model, TangentRequest};
 
 use super::load_scene;
-use crate::error::{Error, Result};
-use crate::model::{Instance, Model};
-use crate::solver::TangentRequest;
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
@@ -23,28 +23,6 @@ pub struct RunArgs {
     /// Do not print a line per increment.
     #[arg(long)]
     quiet: bool,
-}
-
-/// The strain at every increment of the scene's path.
-pub fn path_points(path: &[crate::scene::PathSegment]) -> Vec<[f64; 3]> {
-    let mut points = Vec::new();
-    let mut from = [0.0; 3];
-    for seg in path {
-        for k in 1..=seg.increments {
-            let t = k as f64 / seg.increments as f64;
-            points.push(if k == seg.increments {
-                seg.to
-            } else {
-                [
-                    from[0] + t * (seg.to[0] - from[0]),
-                    from[1] + t * (seg.to[1] - from[1]),
-                    from[2] + t * (seg.to[2] - from[2]),
-                ]
-            });
-        }
-        from = seg.to;
-    }
-    points
 }
 
 /// Header of `response.csv`; the C driver writes the same columns.

@@ -1,5 +1,6 @@
 //! The material-point entry points: init, update, commit, revert, reset, free, state
-//! save/load and the scene's strain path.
+//! save/load and the scene's strain path. Each translates its arguments and calls the
+//! `model::Instance` behind the handle (trial/commit, checkpoint bytes) or its model.
 
 use std::ffi::{c_char, CStr};
 use std::path::Path;
@@ -8,10 +9,9 @@ use std::sync::Arc;
 use super::boundary::{guard, out, slice, slice_mut, Failure, FfiResult};
 use super::cache;
 use super::registry::{self, Entry};
-use super::state_io;
 use super::status::RveStatus;
 use super::workspace::with_workspace;
-use crate::model::{Model, Response};
+use crate::model::{Instance, Model, Response};
 use crate::solver::TangentRequest;
 
 /// An RVE instance handle: a 64-bit integer id into a process-wide table, not a pointer.
@@ -118,15 +118,16 @@ pub(crate) fn update_entry(
     strain: [f64; 3],
     request: RveTangentRequest,
 ) -> FfiResult<Response> {
-    let mut point = entry.lock()?;
+    let mut instance = entry.lock()?;
     let solve_request = match request {
         RveTangentRequest::Consistent => TangentRequest::Consistent,
         RveTangentRequest::None | RveTangentRequest::Elastic => TangentRequest::None,
     };
-    let model: &Arc<Model> = &entry.model;
-    let mut r = with_workspace(model, |ws| point.update(model, strain, ws, solve_request))?;
+    let mut r = with_workspace(&entry.model, |ws| {
+        instance.update(strain, ws, solve_request)
+    })?;
     if request == RveTangentRequest::Elastic {
-        r.tangent = model.elastic_tangent;
+        r.tangent = entry.model.elastic_tangent;
     }
     Ok(r)
 }
@@ -318,15 +319,12 @@ pub unsafe extern "C" fn rve_update(
     )
 }
 
-fn with_point(
-    name: &str,
-    h: RveHandle,
-    f: impl FnOnce(&Arc<Entry>, &mut registry::Point) -> FfiResult,
-) -> u32 {
+/// Runs `f` on the instance behind `h`, locked, inside the panic boundary.
+fn with_instance(name: &str, h: RveHandle, f: impl FnOnce(&mut Instance) -> FfiResult) -> u32 {
     guard(name, || {
         let entry = registry::get(h)?;
-        let mut point = entry.lock()?;
-        f(&entry, &mut point)
+        let mut instance = entry.lock()?;
+        f(&mut instance)
     }) as u32
 }
 
@@ -336,15 +334,15 @@ fn with_point(
 /// `INSTANCE_BUSY` or `PANIC`.
 #[no_mangle]
 pub extern "C" fn rve_commit(h: RveHandle) -> u32 {
-    with_point("rve_commit", h, |_, p| Ok(p.commit()?))
+    with_instance("rve_commit", h, |i| Ok(i.commit()?))
 }
 
 /// Discards the last trial; the committed state stays. Returns `OK`, `BAD_HANDLE`,
 /// `INSTANCE_BUSY` or `PANIC`.
 #[no_mangle]
 pub extern "C" fn rve_revert(h: RveHandle) -> u32 {
-    with_point("rve_revert", h, |_, p| {
-        p.has_trial = false;
+    with_instance("rve_revert", h, |i| {
+        i.revert();
         Ok(())
     })
 }
@@ -353,8 +351,8 @@ pub extern "C" fn rve_revert(h: RveHandle) -> u32 {
 /// trial. Returns `OK`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`.
 #[no_mangle]
 pub extern "C" fn rve_reset(h: RveHandle) -> u32 {
-    with_point("rve_reset", h, |e, p| {
-        *p = registry::Point::new(&e.model);
+    with_instance("rve_reset", h, |i| {
+        i.reset();
         Ok(())
     })
 }
@@ -374,7 +372,8 @@ pub extern "C" fn rve_free(h: RveHandle) -> u32 {
 }
 
 /// Writes to `*size` the number of bytes `rve_state_save` needs for the instance's
-/// committed state (the same for every state of one scene). Returns `OK`,
+/// committed state. It depends on the state (the first updates with a tangent add the
+/// predictor's sensitivity and path curvature): query it before each save. Returns `OK`,
 /// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`; `*size` written on success.
 ///
 /// # Safety
@@ -385,8 +384,7 @@ pub unsafe extern "C" fn rve_state_size(h: RveHandle, size: *mut usize) -> u32 {
     guard("rve_state_size", || {
         let size = out(size, "size")?;
         let entry = registry::get(h)?;
-        let point = entry.lock()?;
-        *size = state_io::encoded_len(&point.committed)?;
+        *size = entry.lock()?.state_size()?;
         Ok(())
     }) as u32
 }
@@ -411,10 +409,7 @@ pub unsafe extern "C" fn rve_state_save(
     guard("rve_state_save", || {
         let written = out(written, "written")?;
         let entry = registry::get(h)?;
-        let bytes = {
-            let point = entry.lock()?;
-            state_io::encode(&entry.model, &point.committed)?
-        };
+        let bytes = entry.lock()?.save_state()?;
         if bytes.len() > len {
             *written = bytes.len();
             return Err(Failure::new(
@@ -445,10 +440,7 @@ pub unsafe extern "C" fn rve_state_load(h: RveHandle, buf: *const u8, len: usize
     guard("rve_state_load", || {
         let bytes = slice(buf, len, "buf")?;
         let entry = registry::get(h)?;
-        let state = state_io::decode(&entry.model, bytes)?;
-        let mut point = entry.lock()?;
-        point.committed = state;
-        point.has_trial = false;
+        entry.lock()?.load_state(bytes)?;
         Ok(())
     }) as u32
 }
@@ -465,7 +457,7 @@ pub unsafe extern "C" fn rve_path_len(h: RveHandle, n: *mut usize) -> u32 {
     guard("rve_path_len", || {
         let n = out(n, "n")?;
         let entry = registry::get(h)?;
-        *n = crate::cli::path_points(&entry.model.scene.spec.path).len();
+        *n = crate::scene::path_points(&entry.model.scene.spec.path).len();
         Ok(())
     }) as u32
 }
@@ -483,7 +475,7 @@ pub unsafe extern "C" fn rve_path_point(h: RveHandle, i: usize, strain: *mut f64
     guard("rve_path_point", || {
         let strain = slice_mut(strain, 3, "strain")?;
         let entry = registry::get(h)?;
-        let points = crate::cli::path_points(&entry.model.scene.spec.path);
+        let points = crate::scene::path_points(&entry.model.scene.spec.path);
         let p = points.get(i).ok_or_else(|| {
             Failure::new(
                 RveStatus::InvalidArgument,

@@ -1,5 +1,7 @@
 //! The C interface: a thin translation layer over the safe Rust API. This is the only
-//! module with `unsafe` code or `extern "C"` functions.
+//! module with `unsafe` code or `extern "C"` functions. A handle names one
+//! [`crate::Instance`] in a process-wide table (`registry`); the entry points check their
+//! arguments, call its methods and map [`crate::Error`] to an [`RveStatus`].
 //!
 //! Conventions (also in the README and the header): handle first, then inputs, then
 //! outputs; every function returns an `RveStatus` as `uint32_t` (except queries that
@@ -12,11 +14,11 @@ mod boundary;
 mod cache;
 mod instance;
 mod registry;
-mod state_io;
 mod status;
 mod version;
 mod workspace;
 
+pub use crate::state::STATE_FORMAT_VERSION;
 pub use batch::rve_update_batch;
 pub use boundary::rve_last_error;
 pub use cache::model_builds;
@@ -27,7 +29,6 @@ pub use instance::{
     RveTangentRequest,
 };
 pub use registry::live_instances;
-pub use state_io::STATE_FORMAT_VERSION;
 pub use status::{rve_status_message, RveStatus, ALL_STATUSES};
 pub use version::{rve_abi_version, rve_version, rve_version_number};
 

@@ -10,74 +10,30 @@ use std::sync::{Arc, Mutex, MutexGuard, RwLock, TryLockError};
 
 use super::boundary::{Failure, FfiResult};
 use super::status::RveStatus;
-use crate::model::{Model, Response};
-use crate::solver::TangentRequest;
-use crate::solver::Workspace;
-use crate::state::State;
+use crate::model::{Instance, Model};
 
 const MAX_GENERATION: u32 = (1 << 20) - 1;
 
-/// One material point behind a handle: the shared model and the instance's own state.
+/// One material point behind a handle: a [`model::Instance`](Instance), which owns the
+/// trial/commit lifecycle, behind a lock that gives one thread at a time, and its model,
+/// kept beside it too so that `rve_clone_model`, the strain path and the per-thread
+/// workspaces read it without taking the lock.
 pub(crate) struct Entry {
     pub model: Arc<Model>,
-    pub point: Mutex<Point>,
-}
-
-/// Committed state plus the last trial (allocated at the first update).
-pub(crate) struct Point {
-    pub committed: State,
-    pub trial: Option<State>,
-    pub has_trial: bool,
-}
-
-impl Point {
-    pub fn new(model: &Model) -> Self {
-        Point {
-            committed: model.new_state(),
-            trial: None,
-            has_trial: false,
-        }
-    }
-
-    /// Trial update from the committed state (as `rve::Instance::update`).
-    pub fn update(
-        &mut self,
-        model: &Model,
-        strain: [f64; 3],
-        ws: &mut Workspace,
-        request: TangentRequest,
-    ) -> crate::Result<Response> {
-        self.has_trial = false;
-        let trial = self.trial.get_or_insert_with(|| model.new_state());
-        let out = model.update(&self.committed, strain, ws, trial, request);
-        self.has_trial = out.is_ok();
-        out
-    }
-
-    /// Accepts the last successful trial.
-    pub fn commit(&mut self) -> crate::Result<()> {
-        match (&mut self.trial, self.has_trial) {
-            (Some(trial), true) => {
-                std::mem::swap(&mut self.committed, trial);
-                self.has_trial = false;
-                Ok(())
-            }
-            _ => Err(crate::Error::NoTrial),
-        }
-    }
+    instance: Mutex<Instance>,
 }
 
 impl Entry {
     pub fn new(model: Arc<Model>) -> Self {
-        let point = Mutex::new(Point::new(&model));
-        Entry { model, point }
+        let instance = Mutex::new(Instance::new(model.clone()));
+        Entry { model, instance }
     }
 
     /// Exclusive access, or `InstanceBusy` when another thread holds the instance. A
     /// panic during an earlier call poisons the lock; the committed state is only ever
-    /// replaced by a whole swap, so it is intact, and only the trial is dropped.
-    pub fn lock(&self) -> FfiResult<MutexGuard<'_, Point>> {
-        match self.point.try_lock() {
+    /// replaced whole (see [`Instance`]), so it is intact, and only the trial is dropped.
+    pub fn lock(&self) -> FfiResult<MutexGuard<'_, Instance>> {
+        match self.instance.try_lock() {
             Ok(g) => Ok(g),
             Err(TryLockError::WouldBlock) => Err(Failure::new(
                 RveStatus::InstanceBusy,
@@ -85,12 +41,17 @@ impl Entry {
                  one thread at a time)",
             )),
             Err(TryLockError::Poisoned(p)) => {
-                self.point.clear_poison();
+                self.instance.clear_poison();
                 let mut g = p.into_inner();
-                g.has_trial = false;
+                g.revert();
                 Ok(g)
             }
         }
+    }
+
+    /// Whether another thread holds the instance right now.
+    fn busy(&self) -> bool {
+        matches!(self.instance.try_lock(), Err(TryLockError::WouldBlock))
     }
 }
 
@@ -179,13 +140,11 @@ pub(crate) fn remove(handle: i64) -> FfiResult<Arc<Entry>> {
         Some(s) if s.generation == generation && s.entry.is_some() => s,
         _ => return Err(bad_handle(handle)),
     };
-    if let Some(e) = &slot.entry {
-        if let Err(TryLockError::WouldBlock) = e.point.try_lock() {
-            return Err(Failure::new(
-                RveStatus::InstanceBusy,
-                "cannot free an instance that another thread is using",
-            ));
-        }
+    if slot.entry.as_ref().is_some_and(|e| e.busy()) {
+        return Err(Failure::new(
+            RveStatus::InstanceBusy,
+            "cannot free an instance that another thread is using",
+        ));
     }
     let entry = slot.entry.take().expect("checked above");
     slot.generation += 1;
@@ -203,6 +162,9 @@ pub fn live_instances() -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::Error;
+    use crate::scene::Scene;
+    use crate::solver::TangentRequest;
 
     #[test]
     fn ids_are_positive_double_exact_and_never_zero() {
@@ -215,5 +177,34 @@ mod tests {
         for bad in [0, 1, -1, 12345, i64::MAX, i64::MIN, 1i64 << 52] {
             assert_eq!(decode(bad), None, "{bad}");
         }
+    }
+
+    /// A panic while an instance is locked poisons the lock; the next call gets the
+    /// instance with its committed state intact and without the trial it had.
+    #[test]
+    fn a_poisoned_instance_keeps_its_committed_state_and_drops_the_trial() {
+        let model = Arc::new(Model::from_scene(&Scene::embedded_default().unwrap()).unwrap());
+        let entry = Entry::new(model.clone());
+        let mut ws = model.workspace();
+        let committed = {
+            let mut i = entry.lock().unwrap();
+            i.update([1e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+                .unwrap();
+            i.commit().unwrap();
+            i.update([2e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+                .unwrap();
+            assert!(i.has_trial());
+            i.committed().clone()
+        };
+        let panicked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let _held = entry.lock().unwrap();
+            panic!("a panic while the instance is locked");
+        }));
+        assert!(panicked.is_err() && entry.instance.is_poisoned());
+        let mut i = entry.lock().unwrap();
+        assert!(!entry.instance.is_poisoned());
+        assert!(!i.has_trial());
+        assert_eq!(i.committed(), &committed);
+        assert!(matches!(i.commit(), Err(Error::NoTrial)));
     }
 }

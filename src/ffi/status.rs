@@ -135,8 +135,11 @@ impl From<&Error> for RveStatus {
                 }
             }
             Error::Solve { .. } => RveStatus::SolverFailed,
-            Error::WorkspaceMismatch => RveStatus::Internal,
+            Error::WorkspaceMismatch | Error::StateEncoding { .. } => RveStatus::Internal,
             Error::NoTrial => RveStatus::NoTrial,
+            Error::BadState { .. } => RveStatus::BadState,
+            Error::StateVersion { .. } => RveStatus::StateVersion,
+            Error::StateMismatch { .. } => RveStatus::StateMismatch,
         }
     }
 }
@@ -194,5 +197,26 @@ mod tests {
             RveStatus::MeshFailed
         );
         assert_eq!(RveStatus::from(&Error::NoTrial), RveStatus::NoTrial);
+        let bad = Error::BadState {
+            reason: String::new(),
+        };
+        let version = Error::StateVersion {
+            found: 9,
+            older: &[1],
+            current: 2,
+        };
+        let mismatch = Error::StateMismatch {
+            saved_unknowns: 1,
+            saved_history: 2,
+            unknowns: 3,
+            history: 4,
+        };
+        let encoding = Error::StateEncoding {
+            reason: String::new(),
+        };
+        assert_eq!(RveStatus::from(&bad), RveStatus::BadState);
+        assert_eq!(RveStatus::from(&version), RveStatus::StateVersion);
+        assert_eq!(RveStatus::from(&mismatch), RveStatus::StateMismatch);
+        assert_eq!(RveStatus::from(&encoding), RveStatus::Internal);
     }
 }

@@ -1,6 +1,7 @@
 //! The safe Rust API: a shared immutable [`Model`] per scene, a small [`Instance`] per
-//! material point, and a per-thread [`crate::solver::Workspace`]. `from_scene` is the
-//! edge where the scene schema becomes the numerical modules' own types.
+//! material point (its trial/commit lifecycle and its checkpoint bytes), and a per-thread
+//! [`crate::solver::Workspace`]. `from_scene` is the edge where the scene schema becomes
+//! the numerical modules' own types.
 
 mod from_scene;
 mod instance;
@@ -9,4 +10,4 @@ mod rve_model;
 
 pub use instance::Instance;
 pub use microstructure::build_microstructure;
-pub use rve_model::{Model, Response, MAX_STRAIN};
+pub use rve_model::{Model, Response};

@@ -10,15 +10,11 @@ use crate::constraint::BoundaryCondition;
 use crate::error::{Error, Result};
 use crate::homogenization::Homogenizer;
 use crate::mesh::{Mesh, Microstructure};
-use crate::scene::Scene;
+use crate::scene::{Scene, MAX_STRAIN};
 use crate::solver::{
     solve_increment, IncrementReport, LinearSolver, Problem, Settings, TangentRequest, Workspace,
 };
 use crate::state::State;
-
-/// Largest strain component accepted: 10 %, a hundred times the strains at which concrete
-/// fails; beyond it a small-strain RVE makes no sense and the input is taken as absurd.
-pub const MAX_STRAIN: f64 = 0.1;
 
 static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(1);
 

@@ -1,12 +1,16 @@
 //! Scenes: the TOML description of an RVE (cell, geometry, mesh, materials, effects,
-//! boundary condition, solver settings, strain path), its loading and its validation.
+//! boundary condition, solver settings, strain path), its loading, its validation and the
+//! strain points of its path (with the strain bound [`MAX_STRAIN`] that validation and
+//! the model's updates share).
 
 mod load;
+mod path;
 mod schema;
 mod validate;
 
 pub use crate::geometry::{Explicit, ExplicitInclusion, Orientation, RandomSpec, ShapeKind};
 pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
+pub use path::{path_points, MAX_STRAIN};
 pub use schema::{
     BoundaryKind, BoundarySpec, CellSpec, EffectsSpec, ElasticSpec, GeometrySpec, GmshSpec,
     InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec, MeshSpec, PathSegment,

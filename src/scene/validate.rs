@@ -1,5 +1,6 @@
 //! Validation: every check names the offending key and says why.
 
+use super::path::MAX_STRAIN;
 use super::schema::*;
 use crate::error::{Error, Result};
 use crate::geometry::{Explicit, Orientation, RandomSpec, ShapeKind};
@@ -203,13 +204,13 @@ impl SceneSpec {
             if seg
                 .to
                 .iter()
-                .any(|v| !v.is_finite() || v.abs() > crate::model::MAX_STRAIN)
+                .any(|v| !v.is_finite() || v.abs() > MAX_STRAIN)
             {
                 return Err(Error::scene(
                     format!("path[{k}].to"),
                     format!(
                         "strain components must be finite and at most {} in magnitude",
-                        crate::model::MAX_STRAIN
+                        MAX_STRAIN
                     ),
                 ));
             }

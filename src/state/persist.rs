@@ -1,0 +1,343 @@
+//! Checkpointing: a [`State`] as versioned bytes, and back. A fixed header, then the state
+//! encoded by serde (bincode 1, little-endian, fixed-width integers).
+//!
+//! ```text
+//! offset  size  field
+//!      0     8  magic "MESORVE\0"
+//!      8     4  format version (u32 LE), STATE_FORMAT_VERSION
+//!     12     4  reserved, 0
+//!     16     8  number of unknowns of the model (u64 LE)
+//!     24     8  number of interface history points of the model (u64 LE)
+//!     32     8  payload length in bytes (u64 LE)
+//!     40     .  payload: bincode of `State`
+//! ```
+//! A reader refuses another magic or a truncated buffer ([`Error::BadState`]), an unknown
+//! format version ([`Error::StateVersion`]: a later format adds a decoder here and keeps
+//! reading the old ones), and a model of other sizes ([`Error::StateMismatch`]).
+//!
+//! | format | library | payload history |
+//! |---|---|---|
+//! | 1 | 0.1.0 | `[delta_max, t_max]` per point (read, `t_max` dropped) |
+//! | 2 | main after 0.1.0 | `delta_max` per point (read, no sensitivity: the next increment starts from the elastic predictor) |
+//! | 3 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 16-bit (read, sensitivity dropped: the next increment starts from the elastic predictor) |
+//! | 4 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 8-bit by blocks, empty until filled ([`Sensitivity`]) (read, kept) |
+//! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`PathCurvature`](super::PathCurvature)) (written) |
+//!
+//! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
+//! model, so this module depends on the state alone; `model::Instance::save_state` and
+//! `load_state` pass them, and the C functions `rve_state_*` are thin over those.
+
+use serde::Deserialize;
+
+use super::instance_state::{Sensitivity, State};
+use crate::error::{Error, Result};
+
+const MAGIC: &[u8; 8] = b"MESORVE\0";
+/// Version of the state byte format written; bump when the layout or `State` changes.
+pub const STATE_FORMAT_VERSION: u32 = 5;
+/// Older formats this library still reads.
+pub const READABLE_OLD_FORMATS: [u32; 4] = [1, 2, 3, 4];
+const HEADER: usize = 40;
+
+/// The sizes of the model a state belongs to, recorded in the header: a state loads only
+/// into a model of the same sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StateSizes {
+    /// Unknowns of the model (`State::unknowns`).
+    pub unknowns: usize,
+    /// Interface history points of the model (`State::history`).
+    pub history: usize,
+}
+
+/// Bytes [`encode`] writes for `state`.
+pub fn encoded_len(state: &State) -> Result<usize> {
+    let payload = bincode::serialized_size(state).map_err(encoding)?;
+    Ok(HEADER + payload as usize)
+}
+
+/// Encodes `state`, a state of a model of `sizes`, in the current format.
+pub fn encode(state: &State, sizes: StateSizes) -> Result<Vec<u8>> {
+    let payload = bincode::serialize(state).map_err(encoding)?;
+    let mut out = Vec::with_capacity(HEADER + payload.len());
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&STATE_FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    out.extend_from_slice(&(sizes.unknowns as u64).to_le_bytes());
+    out.extend_from_slice(&(sizes.history as u64).to_le_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&payload);
+    Ok(out)
+}
+
+/// Decodes bytes written by [`encode`] (this format or an older readable one) for a
+/// model of `sizes`, and checks that the state is usable: sizes, finite values, a
+/// non-negative history.
+pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
+    if bytes.len() < HEADER {
+        return Err(bad(format!(
+            "{} bytes, shorter than the {HEADER}-byte header",
+            bytes.len()
+        )));
+    }
+    if &bytes[..8] != MAGIC {
+        return Err(bad("no mesorve magic (not a saved state)"));
+    }
+    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    if version != STATE_FORMAT_VERSION && !READABLE_OLD_FORMATS.contains(&version) {
+        return Err(Error::StateVersion {
+            found: version,
+            older: &READABLE_OLD_FORMATS,
+            current: STATE_FORMAT_VERSION,
+        });
+    }
+    let (n, nh) = (u64_at(bytes, 16), u64_at(bytes, 24));
+    let (mn, mnh) = (sizes.unknowns as u64, sizes.history as u64);
+    if (n, nh) != (mn, mnh) {
+        return Err(Error::StateMismatch {
+            saved_unknowns: n,
+            saved_history: nh,
+            unknowns: mn,
+            history: mnh,
+        });
+    }
+    let len = u64_at(bytes, 32);
+    if len != (bytes.len() - HEADER) as u64 {
+        return Err(bad(format!(
+            "payload of {} bytes, header says {len}",
+            bytes.len() - HEADER
+        )));
+    }
+    let state = payload(version, &bytes[HEADER..])?;
+    // A valid sensitivity or curvature must have its buffers; empty ones are fine.
+    let filled_if_valid = |valid: bool, values: &[i8]| !valid || !values.is_empty();
+    if state.unknowns.len() as u64 != n
+        || state.history.len() as u64 != nh
+        || !state.sensitivity.data.is_consistent(3 * n as usize)
+        || !filled_if_valid(state.sensitivity.valid, &state.sensitivity.data.values)
+        || !state.curvature.data.is_consistent(n as usize)
+        || !filled_if_valid(state.curvature.valid, &state.curvature.data.values)
+    {
+        return Err(bad("payload sizes disagree with the header"));
+    }
+    if state
+        .strain
+        .iter()
+        .chain(&state.unknowns)
+        .chain(&state.curvature.step)
+        .chain(&state.history)
+        .any(|v| !v.is_finite())
+    {
+        return Err(bad("non-finite values"));
+    }
+    Ok(state)
+}
+
+fn bad(reason: impl Into<String>) -> Error {
+    Error::BadState {
+        reason: reason.into(),
+    }
+}
+
+fn encoding(e: bincode::Error) -> Error {
+    Error::StateEncoding {
+        reason: e.to_string(),
+    }
+}
+
+fn u64_at(bytes: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"))
+}
+
+/// The payload of format `version` (readable, checked by the caller) as a [`State`].
+fn payload(version: u32, payload: &[u8]) -> Result<State> {
+    fn read<'a, T: Deserialize<'a>>(payload: &'a [u8]) -> Result<T> {
+        bincode::deserialize(payload).map_err(|e| bad(e.to_string()))
+    }
+    Ok(match version {
+        1 => read::<Format1>(payload)?.into(),
+        2 => read::<Format2>(payload)?.into(),
+        3 => read::<Format3>(payload)?.into(),
+        4 => read::<Format4>(payload)?.into(),
+        _ => read::<State>(payload)?,
+    })
+}
+
+/// A state of the fields every format stores, without path curvature (formats 1-4 have
+/// none: the first increment after loading predicts to first order) and, when
+/// `sensitivity` is `None`, without sensitivity (the first increment after loading starts
+/// from the elastic predictor). `delta_max` is the history as formats 2-5 store it.
+fn old_state(
+    strain: [f64; 3],
+    unknowns: Vec<f64>,
+    delta_max: Vec<f64>,
+    sensitivity: Option<Sensitivity>,
+) -> State {
+    let mut state = State::virgin(0, 0);
+    state.strain = strain;
+    state.unknowns = unknowns;
+    state.history = delta_max;
+    if let Some(sensitivity) = sensitivity {
+        state.sensitivity = sensitivity;
+    }
+    state
+}
+
+/// Format 1: history as `[delta_max, t_max]` pairs; the `t_max` column is dropped (it is
+/// `t(delta_max)` by construction).
+#[derive(Deserialize)]
+struct Format1 {
+    strain: [f64; 3],
+    unknowns: Vec<f64>,
+    history: Vec<[f64; 2]>,
+}
+
+impl From<Format1> for State {
+    fn from(old: Format1) -> Self {
+        let delta_max = old.history.iter().map(|&[delta_max, _t_max]| delta_max);
+        old_state(old.strain, old.unknowns, delta_max.collect(), None)
+    }
+}
+
+/// Format 2: history as `delta_max` per point, no sensitivity.
+#[derive(Deserialize)]
+struct Format2 {
+    strain: [f64; 3],
+    unknowns: Vec<f64>,
+    history: Vec<f64>,
+}
+
+impl From<Format2> for State {
+    fn from(old: Format2) -> Self {
+        old_state(old.strain, old.unknowns, old.history, None)
+    }
+}
+
+/// Format 3: format 2 plus a 16-bit sensitivity `X` (not its deviation), read and dropped.
+#[derive(Deserialize)]
+struct Format3 {
+    strain: [f64; 3],
+    unknowns: Vec<f64>,
+    history: Vec<f64>,
+    #[allow(dead_code)] // read to check the payload, then dropped
+    sensitivity: SensitivityFormat3,
+}
+
+/// The 16-bit sensitivity of format 3.
+#[derive(Deserialize)]
+#[allow(dead_code)] // read to check the payload, then dropped
+struct SensitivityFormat3 {
+    valid: bool,
+    scale: [f64; 3],
+    values: Vec<i16>,
+}
+
+impl From<Format3> for State {
+    fn from(old: Format3) -> Self {
+        old_state(old.strain, old.unknowns, old.history, None)
+    }
+}
+
+/// Format 4: format 2 plus the 8-bit [`Sensitivity`] (kept), without path curvature.
+#[derive(Deserialize)]
+struct Format4 {
+    strain: [f64; 3],
+    unknowns: Vec<f64>,
+    history: Vec<f64>,
+    sensitivity: Sensitivity,
+}
+
+impl From<Format4> for State {
+    fn from(old: Format4) -> Self {
+        old_state(old.strain, old.unknowns, old.history, Some(old.sensitivity))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SIZES: StateSizes = StateSizes {
+        unknowns: 7,
+        history: 5,
+    };
+
+    fn state() -> State {
+        let mut s = State::virgin(SIZES.unknowns, SIZES.history);
+        s.strain = [1e-4, -2e-5, 3e-5];
+        s.unknowns
+            .iter_mut()
+            .enumerate()
+            .for_each(|(i, u)| *u = i as f64 * 1e-3);
+        s.history[2] = 4e-4;
+        s.sensitivity.store_negated(&[0.5; 21]);
+        s.curvature.store(&[1e-6; 7], [1e-5, 0.0, 0.0]);
+        s
+    }
+
+    /// What `encode` writes decodes to the same state, and `encoded_len` is its length.
+    #[test]
+    fn round_trip() {
+        let s = state();
+        let bytes = encode(&s, SIZES).unwrap();
+        assert_eq!(bytes.len(), encoded_len(&s).unwrap());
+        assert_eq!(decode(&bytes, SIZES).unwrap(), s);
+    }
+
+    /// Each refusal is its own typed error, naming what it found.
+    #[test]
+    fn refusals_are_typed() {
+        let bytes = encode(&state(), SIZES).unwrap();
+        assert!(matches!(
+            decode(&bytes[..39], SIZES),
+            Err(Error::BadState { .. })
+        ));
+        assert!(matches!(
+            decode(&bytes[..bytes.len() - 1], SIZES),
+            Err(Error::BadState { .. })
+        ));
+        let mut other = bytes.clone();
+        other[0] = b'X';
+        assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
+        let mut other = bytes.clone();
+        other[8] = 6;
+        assert!(matches!(
+            decode(&other, SIZES),
+            Err(Error::StateVersion {
+                found: 6,
+                current: 5,
+                ..
+            })
+        ));
+        let bigger = StateSizes {
+            unknowns: 8,
+            ..SIZES
+        };
+        let err = decode(&bytes, bigger).unwrap_err();
+        assert!(matches!(
+            err,
+            Error::StateMismatch {
+                saved_unknowns: 7,
+                saved_history: 5,
+                unknowns: 8,
+                history: 5
+            }
+        ));
+        assert_eq!(
+            err.to_string(),
+            "state of a model with 7 unknowns and 5 history points; this instance's model \
+             has 8 and 5 (another scene)"
+        );
+        // A header of matching sizes over a payload of other sizes.
+        let small = State::virgin(3, 5);
+        let lying = encode(&small, SIZES).unwrap();
+        let err = decode(&lying, SIZES).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "state bytes: payload sizes disagree with the header"
+        );
+        let mut infinite = state();
+        infinite.history[0] = f64::INFINITY;
+        let err = decode(&encode(&infinite, SIZES).unwrap(), SIZES).unwrap_err();
+        assert!(matches!(err, Error::BadState { .. }), "{err}");
+    }
+}

@@ -1,0 +1,143 @@
+//! Checkpoint/restart through the safe API only: `Instance::save_state`, `load_state` and
+//! the typed errors of `rve::state::persist`, without the C interface.
+
+mod common;
+
+use std::sync::Arc;
+
+use rve::scene::path_points;
+use rve::{Error, Instance, Model, Response, TangentRequest};
+
+fn bits(r: &Response) -> ([u64; 3], [u64; 9], u64) {
+    (
+        r.stress.map(f64::to_bits),
+        r.tangent.map(f64::to_bits),
+        r.s_zz.to_bits(),
+    )
+}
+
+/// Along the paper path (20 increments, through the snap-back at increment 19), the state
+/// saved after every increment `k`, loaded into a new instance of a model built again from
+/// the scene (as a restarted process would), continues the path bit-identically: stress,
+/// tangent, `s_zz` and the solver's counters of every later increment, and the saved
+/// bytes of every later state. The loaded state equals the saved one.
+#[test]
+fn a_restarted_instance_continues_the_path_bit_identically() {
+    let scene = common::scene("scenes/paper_rve.toml");
+    let path = path_points(&scene.spec.path);
+    assert_eq!(path.len(), 20);
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws = model.workspace();
+    // The reference run: responses, states and saved bytes after every increment.
+    let mut reference = Instance::new(model.clone());
+    let mut states = vec![reference.committed().clone()];
+    let mut saved = vec![reference.save_state().unwrap()];
+    let mut responses = Vec::new();
+    for eps in &path {
+        let r = reference
+            .update(*eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
+        reference.commit().unwrap();
+        assert_eq!(
+            reference.state_size().unwrap(),
+            reference.save_state().unwrap().len()
+        );
+        states.push(reference.committed().clone());
+        saved.push(reference.save_state().unwrap());
+        responses.push(r);
+    }
+    assert!(
+        responses.iter().any(|r| r.report.substeps > 1),
+        "the path crosses the snap-back"
+    );
+    let restarted_model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws2 = restarted_model.workspace();
+    for k in 0..path.len() {
+        let mut restarted = Instance::new(restarted_model.clone());
+        restarted.load_state(&saved[k]).unwrap();
+        // Compared without `assert_eq!`, whose message would print two whole states.
+        assert!(
+            restarted.committed() == &states[k],
+            "saved at {k}: the loaded state differs from the saved one"
+        );
+        for j in k..path.len() {
+            let r = restarted
+                .update(path[j], &mut ws2, TangentRequest::Consistent)
+                .unwrap();
+            restarted.commit().unwrap();
+            assert_eq!(bits(&r), bits(&responses[j]), "saved at {k}, increment {j}");
+            assert_eq!(r.report, responses[j].report, "saved at {k}, increment {j}");
+            assert_eq!(restarted.save_state().unwrap(), saved[j + 1]);
+        }
+    }
+}
+
+/// A refused load changes nothing: not the committed state, not the pending trial. Each
+/// refusal is its own typed error; a successful load discards the trial.
+#[test]
+fn a_refused_load_changes_nothing() {
+    let scene = common::scene("scenes/paper_rve.toml");
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws = model.workspace();
+    let mut inst = Instance::new(model.clone());
+    inst.update([1e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+        .unwrap();
+    inst.commit().unwrap();
+    let bytes = inst.save_state().unwrap();
+    let committed = inst.committed().clone();
+    inst.update([1.2e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+        .unwrap();
+
+    let mut truncated = bytes.clone();
+    truncated.pop();
+    let mut future = bytes.clone();
+    future[8..12].copy_from_slice(&6u32.to_le_bytes());
+    let other_scene = common::scene("scenes/gmsh_two_circles.toml");
+    let other_model = Arc::new(Model::from_scene(&other_scene).unwrap());
+    let foreign = Instance::new(other_model).save_state().unwrap();
+    let e = inst.load_state(&truncated).unwrap_err();
+    assert!(matches!(e, Error::BadState { .. }), "{e}");
+    let e = inst.load_state(&future).unwrap_err();
+    assert!(matches!(e, Error::StateVersion { found: 6, .. }), "{e}");
+    assert_eq!(
+        e.to_string(),
+        "state format version 6; this library reads versions [1, 2, 3, 4] and 5"
+    );
+    let e = inst.load_state(&foreign).unwrap_err();
+    assert!(matches!(e, Error::StateMismatch { .. }), "{e}");
+    assert!(e.to_string().contains("(another scene)"), "{e}");
+
+    assert!(
+        inst.committed() == &committed,
+        "a refused load changed the state"
+    );
+    assert!(inst.has_trial(), "the trial survives refused loads");
+    inst.load_state(&bytes).unwrap();
+    assert!(!inst.has_trial());
+    assert!(matches!(inst.commit(), Err(Error::NoTrial)));
+    assert!(inst.committed() == &committed, "the loaded state differs");
+}
+
+/// The format 1 checkpoint that mesorve 0.1.0 saved (see tests/ffi.rs) loads through the
+/// safe API too, and is saved again in the current format.
+#[test]
+fn a_format_1_checkpoint_loads_through_the_safe_api() {
+    let bytes = std::fs::read(common::repo("tests/data/state_format1_paper_rve.bin")).unwrap();
+    let scene = common::scene("scenes/paper_rve.toml");
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut inst = Instance::new(model.clone());
+    inst.load_state(&bytes).unwrap();
+    assert_eq!(inst.committed().strain, [1.5e-4, 0.0, 0.0]);
+    assert!(!inst.committed().sensitivity.valid);
+    let again = inst.save_state().unwrap();
+    assert_eq!(
+        u32::from_le_bytes(again[8..12].try_into().unwrap()),
+        rve::state::STATE_FORMAT_VERSION
+    );
+    let mut copy = Instance::new(model);
+    copy.load_state(&again).unwrap();
+    assert!(
+        copy.committed() == inst.committed(),
+        "the state saved again differs"
+    );
+}
