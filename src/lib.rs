@@ -10,9 +10,15 @@
 //! is a module of the `rve` binary, not of this library, so `librve.so` does not link
 //! clap.
 //!
-//! Dependencies flow one way:
-//! `ffi -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
-//! with `scene` describing everything and `geometry` producing microstructures.
+//! Dependencies flow one way (`tests/layers.rs` fails on an import against this order):
+//!
+//! ```text
+//! ffi -> host -> model -> {scene, io, solver, homogenization} -> assembly -> constraint
+//!     -> {mesh, element, state} -> {geometry, material, interface} -> error
+//! ```
+//!
+//! `model` is the edge where the scene schema becomes the numerical modules' own types
+//! (`model::from_scene`); no numerical module reads `scene`.
 
 pub mod assembly;
 pub mod constraint;

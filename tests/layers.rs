@@ -1,0 +1,142 @@
+//! The library's dependencies flow one way (the sentence in `src/lib.rs`):
+//!
+//! ```text
+//! ffi -> host -> model -> {scene, io, solver, homogenization} -> assembly -> constraint
+//!     -> {mesh, element, state} -> {geometry, material, interface} -> error
+//! ```
+//!
+//! Every `crate::<module>` path in a module's source (its `use` lines and inline paths)
+//! must name a module of a lower layer, or its own. The command-line tool is the binary's
+//! and reaches the library as `rve::`.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Layers from the bottom; a module may use the modules of the layers below its own.
+const LAYERS: &[&[&str]] = &[
+    &["error"],
+    &["geometry", "material", "interface"],
+    &["mesh", "element", "state"],
+    &["constraint"],
+    &["assembly"],
+    &["scene", "io", "solver", "homogenization"],
+    &["model"],
+    &["host"],
+    &["ffi"],
+];
+
+/// Items `lib.rs` re-exports at the crate root, by the module that defines them.
+const ROOT_ITEMS: &[(&str, &str)] = &[
+    ("Error", "error"),
+    ("Result", "error"),
+    ("VERSION", "error"),
+    ("Instance", "model"),
+    ("Model", "model"),
+    ("Response", "model"),
+    ("Scene", "scene"),
+    ("TangentRequest", "solver"),
+    ("Workspace", "solver"),
+    ("State", "state"),
+];
+
+fn layer_of(module: &str) -> Option<usize> {
+    LAYERS.iter().position(|layer| layer.contains(&module))
+}
+
+/// The modules a source text names through `crate::`, with the line of each.
+fn crate_paths(text: &str) -> Vec<(String, usize)> {
+    let mut out = Vec::new();
+    for (number, line) in text.lines().enumerate() {
+        let code = line.split("//").next().unwrap_or("");
+        let mut rest = code;
+        while let Some(at) = rest.find("crate::") {
+            let name: String = rest[at + 7..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            let module = ROOT_ITEMS
+                .iter()
+                .find(|(item, _)| *item == name)
+                .map_or(name.clone(), |(_, m)| m.to_string());
+            if !module.is_empty() {
+                out.push((module, number + 1));
+            }
+            rest = &rest[at + 7..];
+        }
+        // `use crate::{a::X, b::Y}` groups.
+        if let Some(at) = code.find("crate::{") {
+            let group = code[at + 8..].split('}').next().unwrap_or("");
+            for part in group.split(',') {
+                let name = part.trim().split("::").next().unwrap_or("").to_string();
+                if !name.is_empty() {
+                    out.push((name, number + 1));
+                }
+            }
+        }
+    }
+    out
+}
+
+fn visit(dir: &Path, files: &mut Vec<std::path::PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            visit(&path, files);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            files.push(path);
+        }
+    }
+}
+
+#[test]
+fn imports_follow_the_layer_order() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    visit(&src, &mut files);
+    let mut modules = BTreeMap::new();
+    let mut violations = Vec::new();
+    for file in &files {
+        let relative = file.strip_prefix(&src).unwrap();
+        let first = relative
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_str()
+            .unwrap();
+        let module = first.trim_end_matches(".rs");
+        if matches!(module, "lib" | "main" | "cli" | "bin") {
+            continue;
+        }
+        let own = layer_of(module)
+            .unwrap_or_else(|| panic!("src/{module} is in no layer: add it to LAYERS and lib.rs"));
+        *modules.entry(module.to_string()).or_insert(0) += 1;
+        let text = std::fs::read_to_string(file).unwrap();
+        for (target, line) in crate_paths(&text) {
+            if target == module {
+                continue;
+            }
+            match layer_of(&target) {
+                Some(layer) if layer < own => {}
+                _ => violations.push(format!(
+                    "{}:{line}: {module} (layer {own}) uses crate::{target}",
+                    relative.display()
+                )),
+            }
+        }
+    }
+    assert!(modules.len() >= 14, "found only {modules:?}");
+    assert!(
+        violations.is_empty(),
+        "imports against the layer order:\n{}",
+        violations.join("\n")
+    );
+}
+
+/// The checker itself sees the three forms of a path.
+#[test]
+fn the_checker_sees_use_lines_groups_and_inline_paths() {
+    let text = "use crate::solver::Workspace;\nuse crate::{mesh::Mesh, scene};\nlet x = crate::model::MAX;\n// crate::ffi in a comment\n";
+    let found: Vec<String> = crate_paths(text).into_iter().map(|(m, _)| m).collect();
+    assert_eq!(found, ["solver", "mesh", "scene", "model"]);
+}
