@@ -113,6 +113,8 @@ int main(int argc, char **argv) {
     EXPECT(rve_init_file(NULL, &untouched), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_init_file(path, NULL), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_init_text(NULL, NULL, &untouched), RVE_STATUS_NULL_ARGUMENT);
+    EXPECT(rve_init(NULL, NULL), RVE_STATUS_NULL_ARGUMENT);
+    EXPECT(rve_init(path, NULL), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update(h, NULL, sig, d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update(h, eps, NULL, d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update(h, eps, sig, NULL, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
@@ -129,6 +131,8 @@ int main(int argc, char **argv) {
 
     /* BAD_SCENE: missing file, malformed text, invalid value, non-UTF-8 */
     EXPECT(rve_init_file("/nonexistent/scene.toml", &untouched), RVE_STATUS_BAD_SCENE);
+    EXPECT(rve_init("/nonexistent/scene.toml", &untouched), RVE_STATUS_BAD_SCENE);
+    EXPECT(rve_init(dir, &untouched), RVE_STATUS_BAD_SCENE); /* a directory */
     EXPECT(rve_init_text("[cell\nsize = ", NULL, &untouched), RVE_STATUS_BAD_SCENE);
     text = replace(paper, "delta_c = 0.0002", "delta_c = -1.0");
     EXPECT(rve_init_text(text, NULL, &untouched), RVE_STATUS_BAD_SCENE);

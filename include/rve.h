@@ -160,6 +160,21 @@ uint32_t rve_update_batch(const RveHandle *handles,
 // NUL-terminated) for the duration of the call.
 size_t rve_last_error(char *buf, size_t len);
 
+// Creates an instance and writes its handle to `*out_handle`: from the scene file
+// `scene_path` (NUL-terminated; exactly `rve_init_file`), or, when `scene_path` is NULL,
+// from the paper's RVE embedded in the library (`scenes/paper_rve.toml`: section 5.2,
+// plane stress, periodic; the scene `rve run` uses by default). Instances of one scene
+// share one model.
+//
+// Returns `OK`, `NULL_ARGUMENT` (`out_handle` is NULL), `BAD_SCENE`, `MESH_FAILED` or
+// `PANIC`. `*out_handle` is written only on success; release the instance with
+// `rve_free`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_init(const char *scene_path, RveHandle *out_handle);
+
 // Creates an instance from the scene file `path` (NUL-terminated; TOML) and writes its
 // handle to `*out_handle`. Relative paths inside the scene (`geometry.file`) resolve
 // against the scene file's directory. Instances of one scene share one immutable model

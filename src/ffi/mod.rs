@@ -10,6 +10,7 @@
 mod batch;
 mod boundary;
 mod cache;
+mod init;
 mod instance;
 mod registry;
 mod state_io;
@@ -20,6 +21,7 @@ mod workspace;
 pub use batch::rve_update_batch;
 pub use boundary::rve_last_error;
 pub use cache::model_builds;
+pub use init::rve_init;
 pub use instance::{
     rve_clone_model, rve_commit, rve_free, rve_init_file, rve_init_text, rve_model_builds,
     rve_path_len, rve_path_point, rve_reset, rve_revert, rve_state_load, rve_state_save,
