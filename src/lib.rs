@@ -5,7 +5,7 @@
 //! doc comments refer to that paper.
 //!
 //! Dependencies flow one way:
-//! `ffi -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
+//! `ffi -> host -> model -> {homogenization, solver, assembly, constraint} -> {element, material, interface, mesh}`,
 //! with `scene` describing everything and `geometry` producing microstructures.
 
 pub mod assembly;
@@ -16,6 +16,7 @@ pub mod error;
 pub mod ffi;
 pub mod geometry;
 pub mod homogenization;
+pub mod host;
 pub mod interface;
 pub mod io;
 pub mod material;

@@ -9,14 +9,16 @@
 
 mod batch;
 mod boundary;
-mod cache;
 mod init;
 mod instance;
 mod registry;
 mod state_io;
 mod status;
 mod version;
-mod workspace;
+
+// The model cache and the per-thread workspaces are shared with the UMAT (crate::host).
+use crate::model::cache;
+use crate::model::workspaces as workspace;
 
 pub use batch::rve_update_batch;
 pub use boundary::rve_last_error;
