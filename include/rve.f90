@@ -122,7 +122,7 @@ module rve
   public :: rve_update_batch, rve_last_error, rve_init, rve_init_file, rve_init_text, &
       rve_clone_model, rve_update_ex, rve_update, rve_commit, rve_revert, rve_reset, &
       rve_free, rve_state_size, rve_state_save, rve_state_load, rve_path_len, &
-      rve_path_point, rve_model_builds, rve_status_message, rve_version, &
+      rve_path_point, rve_model_builds, rve_status_message, rve_umat, rve_version, &
       rve_version_number, rve_abi_version
 
   interface
@@ -301,6 +301,29 @@ module rve
       integer(c_int32_t), value, intent(in) :: code
       type(c_ptr) :: msg
     end function rve_status_message
+
+    ! The Abaqus UMAT (the library also exports it as umat_ and UMAT): a host calls
+    ! `umat` with Abaqus's argument list; this binding names it in Fortran and makes the
+    ! hidden length of cmname explicit. Conventions: README, "Use it from an FE code".
+    subroutine rve_umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, &
+        drpldt, stran, dstran, time, dtime, temp, dtemp, predef, dpred, cmname, ndi, nshr, &
+        ntens, nstatv, props, nprops, coords, drot, pnewdt, celent, dfgrd0, dfgrd1, noel, &
+        npt, layer, kspt, kstep, kinc, cmname_len) bind(c, name="rve_umat")
+      import :: c_double, c_char, c_int, c_size_t
+      real(c_double), intent(inout) :: stress(*), statev(*), ddsdde(*)
+      real(c_double), intent(inout) :: sse, spd, scd, rpl, ddsddt(*), drplde(*), drpldt
+      real(c_double), intent(in) :: stran(*), dstran(*), time(2), dtime, temp, dtemp
+      real(c_double), intent(in) :: predef(*), dpred(*)
+      character(kind=c_char), intent(in) :: cmname(*)
+      integer(c_int), intent(in) :: ndi, nshr, ntens, nstatv
+      real(c_double), intent(in) :: props(*)
+      integer(c_int), intent(in) :: nprops
+      real(c_double), intent(in) :: coords(3), drot(3, 3)
+      real(c_double), intent(inout) :: pnewdt
+      real(c_double), intent(in) :: celent, dfgrd0(3, 3), dfgrd1(3, 3)
+      integer(c_int), intent(in) :: noel, npt, layer, kspt, kstep, kinc
+      integer(c_size_t), value, intent(in) :: cmname_len
+    end subroutine rve_umat
 
     ! Static NUL-terminated "major.minor.patch": use rve_version_f.
     function rve_version() bind(c, name="rve_version") result(version)

@@ -14,6 +14,7 @@ mod instance;
 mod registry;
 mod state_io;
 mod status;
+mod umat;
 mod version;
 
 // The model cache and the per-thread workspaces are shared with the UMAT (crate::host).
@@ -33,6 +34,7 @@ pub use instance::{
 pub use registry::live_instances;
 pub use state_io::STATE_FORMAT_VERSION;
 pub use status::{rve_status_message, RveStatus, ALL_STATUSES};
+pub use umat::rve_umat;
 pub use version::{rve_abi_version, rve_version, rve_version_number};
 
 /// ABI version: the suffix of the soname `librve.so.<ABI_VERSION>`, also the header's
