@@ -113,6 +113,8 @@ int main(int argc, char **argv) {
     EXPECT(rve_init_file(NULL, &untouched), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_init_file(path, NULL), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_init_text(NULL, NULL, &untouched), RVE_STATUS_NULL_ARGUMENT);
+    EXPECT(rve_init(NULL, NULL), RVE_STATUS_NULL_ARGUMENT);
+    EXPECT(rve_init(path, NULL), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update(h, NULL, sig, d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update(h, eps, NULL, d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update(h, eps, sig, NULL, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
@@ -129,6 +131,8 @@ int main(int argc, char **argv) {
 
     /* BAD_SCENE: missing file, malformed text, invalid value, non-UTF-8 */
     EXPECT(rve_init_file("/nonexistent/scene.toml", &untouched), RVE_STATUS_BAD_SCENE);
+    EXPECT(rve_init("/nonexistent/scene.toml", &untouched), RVE_STATUS_BAD_SCENE);
+    EXPECT(rve_init(dir, &untouched), RVE_STATUS_BAD_SCENE); /* a directory */
     EXPECT(rve_init_text("[cell\nsize = ", NULL, &untouched), RVE_STATUS_BAD_SCENE);
     text = replace(paper, "delta_c = 0.0002", "delta_c = -1.0");
     EXPECT(rve_init_text(text, NULL, &untouched), RVE_STATUS_BAD_SCENE);
@@ -267,6 +271,47 @@ int main(int argc, char **argv) {
             fprintf(stderr, "INSTANCE_BUSY never seen\n");
             failures++;
         }
+    }
+
+    /* The UMAT (Abaqus arguments; CMNAME `@ABAQUS_RVE_UMAT` names no scene: the embedded
+     * paper RVE, plane stress, NTENS 3): the answer of rve_update on rve_init(NULL); a
+     * NULL argument sets PNEWDT < 1 and the message, never a crash. */
+    {
+        double stress[3] = {7, 7, 7}, ddsdde[9], statev[3] = {0}, zero3[3] = {0}, strain[3] =
+            {6e-5, 1e-5, 2e-5}, t[2] = {0, 0}, dt = 1, r = 0, pnewdt = 1e36, eye[9] = {0};
+        double ref_s[3], ref_d[9];
+        const char name[80] = "@ABAQUS_RVE_UMAT";
+        int ndi = 2, nshr = 1, ntens = 3, nstatv = 3, nprops = 0, noel = 1, npt = 1, zero = 0,
+            one = 1;
+        RveHandle he = 0;
+        checks++;
+        EXPECT(rve_init(NULL, &he), RVE_STATUS_OK);
+        EXPECT(rve_update(he, strain, ref_s, ref_d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_OK);
+        rve_umat(stress, statev, ddsdde, &r, &r, &r, &r, ddsdde, ddsdde, &r, zero3, strain, t,
+                 &dt, &r, &r, &r, &r, name, &ndi, &nshr, &ntens, &nstatv, eye, &nprops, eye,
+                 eye, &pnewdt, &r, eye, eye, &noel, &npt, &zero, &zero, &one, &one,
+                 strlen(name));
+        if (memcmp(stress, ref_s, sizeof ref_s) != 0 || ddsdde[1] != ref_d[3] ||
+            ddsdde[3] != ref_d[1] || pnewdt != 1e36 || statev[0] < 1) {
+            fprintf(stderr, "rve_umat differs from rve_update: %g %g\n", stress[0], ref_s[0]);
+            failures++;
+        }
+        checks++;
+        stress[0] = 7;
+        rve_umat(stress, statev, NULL, &r, &r, &r, &r, ddsdde, ddsdde, &r, zero3, strain, t,
+                 &dt, &r, &r, &r, &r, name, &ndi, &nshr, &ntens, &nstatv, eye, &nprops, eye,
+                 eye, &pnewdt, &r, eye, eye, &noel, &npt, &zero, &zero, &one, &one,
+                 strlen(name));
+        {
+            char m[256];
+            rve_last_error(m, sizeof m);
+            if (!(pnewdt < 1) || stress[0] != 7 || !strstr(m, "DDSDDE")) {
+                fprintf(stderr, "rve_umat with DDSDDE = NULL: PNEWDT %g, message '%s'\n",
+                        pnewdt, m);
+                failures++;
+            }
+        }
+        EXPECT(rve_free(he), RVE_STATUS_OK);
     }
 
     /* Unknown status codes have a message too. */

@@ -5,10 +5,13 @@
  * Writes CSV with the first 20 columns of `rve run`'s response.csv (step .. factorizations)
  * with %.17g, so the values compare bit for bit after parsing (tests/c_driver.rs).
  *
- * Usage: rve_driver SCENE.toml [OUT.csv]      (default output: stdout)
+ * Usage: rve_driver [SCENE.toml [OUT.csv]]    (default output: stdout)
+ * SCENE `-` or absent: the paper's RVE embedded in the library (rve_init with NULL), the
+ * scene `rve run` solves when given none.
  */
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "rve.h"
 
@@ -25,16 +28,13 @@ int main(int argc, char **argv) {
     size_t n = 0, i;
     uint32_t st;
     FILE *out = stdout;
-    if (argc < 2) {
-        fprintf(stderr, "usage: %s SCENE.toml [OUT.csv]\n", argv[0]);
-        return 2;
-    }
+    const char *scene = argc > 1 && strcmp(argv[1], "-") != 0 ? argv[1] : NULL;
     if (rve_abi_version() != RVE_ABI_VERSION) {
         fprintf(stderr, "rve_driver: library ABI %u, header ABI %d\n", (unsigned)rve_abi_version(),
                 RVE_ABI_VERSION);
         return 1;
     }
-    if ((st = rve_init_file(argv[1], &h)) != RVE_STATUS_OK) return fail("rve_init_file", st);
+    if ((st = rve_init(scene, &h)) != RVE_STATUS_OK) return fail("rve_init", st);
     if ((st = rve_path_len(h, &n)) != RVE_STATUS_OK) return fail("rve_path_len", st);
     if (argc > 2 && !(out = fopen(argv[2], "w"))) {
         perror(argv[2]);
@@ -58,6 +58,7 @@ int main(int argc, char **argv) {
     }
     if (out != stdout) fclose(out);
     if ((st = rve_free(h)) != RVE_STATUS_OK) return fail("rve_free", st);
-    fprintf(stderr, "rve_driver: %lu increments of %s\n", (unsigned long)n, argv[1]);
+    fprintf(stderr, "rve_driver: %lu increments of %s\n", (unsigned long)n,
+            scene ? scene : "the embedded paper RVE");
     return 0;
 }

@@ -7,7 +7,7 @@
 ! Exit status 0 when every check passed.
 program api_check
   use rve
-  use, intrinsic :: iso_c_binding, only: c_associated
+  use, intrinsic :: iso_c_binding, only: c_associated, c_null_ptr
   use, intrinsic :: iso_fortran_env, only: error_unit
   implicit none
   integer :: checks = 0, failures = 0
@@ -41,6 +41,7 @@ program api_check
       'distinct non-zero handles')
 
   call updates()
+  call init_embedded()
   call trial_semantics()
   call state_bytes()
   call batch()
@@ -110,6 +111,36 @@ contains
     call expect_status(rve_revert(h), RVE_STATUS_OK, 'rve_revert')
     call expect_status(rve_revert(h2), RVE_STATUS_OK, 'rve_revert')
   end subroutine updates
+
+  ! rve_init: NULL (c_null_ptr; rve_init_f without a path) is the embedded paper RVE, the
+  ! scene of paper_rve.toml, so it answers eps1 as h does; a path is rve_init_file.
+  subroutine init_embedded()
+    integer(c_int64_t) :: he, hf, hraw, untouched
+    integer(c_int64_t) :: before
+    real(c_double) :: s0(3), s1(3), s2(3), d(3, 3)
+    s0 = 0; s1 = 0; s2 = 0; d = 0
+    he = 0; hf = 0; hraw = 0; untouched = 777
+    call expect_status(rve_update(h, eps1, s0, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update')
+    call expect_status(rve_revert(h), RVE_STATUS_OK, 'rve_revert')
+    before = rve_model_builds()
+    call expect_status(rve_init_f(handle=he), RVE_STATUS_OK, 'rve_init_f (embedded)')
+    call expect_status(rve_init(c_null_ptr, hraw), RVE_STATUS_OK, 'rve_init(c_null_ptr)')
+    call expect(rve_model_builds() == before + 1, 'embedded instances share one model')
+    call expect_status(rve_init_f(scene, hf), RVE_STATUS_OK, 'rve_init_f (path)')
+    call expect_status(rve_update(he, eps1, s1, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update (embedded)')
+    call expect_status(rve_update(hf, eps1, s2, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK, &
+        'rve_update (path)')
+    call expect(all_bits(s0, s1) .and. all_bits(s0, s2), &
+        'rve_init: embedded scene and path answer as paper_rve.toml')
+    call expect_status(rve_init_f(trim(dir) // '/no_such_scene.toml', untouched), &
+        RVE_STATUS_BAD_SCENE, 'rve_init_f (missing file)')
+    call expect(untouched == 777, 'no handle written on failure')
+    call expect_status(rve_free(he), RVE_STATUS_OK, 'rve_free')
+    call expect_status(rve_free(hraw), RVE_STATUS_OK, 'rve_free')
+    call expect_status(rve_free(hf), RVE_STATUS_OK, 'rve_free')
+  end subroutine init_embedded
 
   ! Trials do not change the committed state; revert and reset.
   subroutine trial_semantics()

@@ -38,13 +38,14 @@
 ! - Pointers that C accepts as NULL (rve_update's tangent with RVE_TANGENT_REQUEST_NONE,
 !   rve_update_ex's info, rve_init_text's base_dir, rve_last_error's buffer) are declared
 !   as arrays/variables here: pass a dummy (tangent, info), use rve_init_text_f (base_dir
-!   absent = working directory) and rve_last_error_f.
+!   absent = working directory) and rve_last_error_f. rve_init's scene_path, whose NULL
+!   means the embedded paper RVE, is a `type(c_ptr), value`: use rve_init_f.
 !
 ! Thread safety as in C: distinct instances may be updated from distinct threads
 ! (OpenMP); one instance, one thread at a time.
 module rve
   use, intrinsic :: iso_c_binding, only: c_char, c_double, c_int, c_int8_t, c_int32_t, &
-      c_int64_t, c_null_char, c_ptr, c_size_t, c_associated, c_f_pointer
+      c_int64_t, c_null_char, c_ptr, c_size_t, c_associated, c_f_pointer, c_loc, c_null_ptr
   implicit none
   private
 
@@ -118,10 +119,10 @@ module rve
   end type rve_info
 
   ! ---- bind(C) interfaces: one per function of include/rve.h, in the header's order ----
-  public :: rve_update_batch, rve_last_error, rve_init_file, rve_init_text, &
+  public :: rve_update_batch, rve_last_error, rve_init, rve_init_file, rve_init_text, &
       rve_clone_model, rve_update_ex, rve_update, rve_commit, rve_revert, rve_reset, &
       rve_free, rve_state_size, rve_state_save, rve_state_load, rve_path_len, &
-      rve_path_point, rve_model_builds, rve_status_message, rve_version, &
+      rve_path_point, rve_model_builds, rve_status_message, rve_umat, rve_version, &
       rve_version_number, rve_abi_version
 
   interface
@@ -151,6 +152,15 @@ module rve
       integer(c_size_t), value, intent(in) :: len
       integer(c_size_t) :: full_len
     end function rve_last_error
+
+    ! scene_path: c_loc of a NUL-terminated character array, or c_null_ptr for the paper's
+    ! RVE embedded in the library (use rve_init_f). out_handle written only on success.
+    function rve_init(scene_path, out_handle) bind(c, name="rve_init") result(status)
+      import :: c_ptr, c_int64_t, c_int32_t
+      type(c_ptr), value, intent(in) :: scene_path
+      integer(c_int64_t), intent(inout) :: out_handle
+      integer(c_int32_t) :: status
+    end function rve_init
 
     ! path: NUL-terminated. out_handle written only on success.
     function rve_init_file(path, out_handle) bind(c, name="rve_init_file") result(status)
@@ -292,6 +302,29 @@ module rve
       type(c_ptr) :: msg
     end function rve_status_message
 
+    ! The Abaqus UMAT (the library also exports it as umat_ and UMAT): a host calls
+    ! `umat` with Abaqus's argument list; this binding names it in Fortran and makes the
+    ! hidden length of cmname explicit. Conventions: README, "Use it from an FE code".
+    subroutine rve_umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, &
+        drpldt, stran, dstran, time, dtime, temp, dtemp, predef, dpred, cmname, ndi, nshr, &
+        ntens, nstatv, props, nprops, coords, drot, pnewdt, celent, dfgrd0, dfgrd1, noel, &
+        npt, layer, kspt, kstep, kinc, cmname_len) bind(c, name="rve_umat")
+      import :: c_double, c_char, c_int, c_size_t
+      real(c_double), intent(inout) :: stress(*), statev(*), ddsdde(*)
+      real(c_double), intent(inout) :: sse, spd, scd, rpl, ddsddt(*), drplde(*), drpldt
+      real(c_double), intent(in) :: stran(*), dstran(*), time(2), dtime, temp, dtemp
+      real(c_double), intent(in) :: predef(*), dpred(*)
+      character(kind=c_char), intent(in) :: cmname(*)
+      integer(c_int), intent(in) :: ndi, nshr, ntens, nstatv
+      real(c_double), intent(in) :: props(*)
+      integer(c_int), intent(in) :: nprops
+      real(c_double), intent(in) :: coords(3), drot(3, 3)
+      real(c_double), intent(inout) :: pnewdt
+      real(c_double), intent(in) :: celent, dfgrd0(3, 3), dfgrd1(3, 3)
+      integer(c_int), intent(in) :: noel, npt, layer, kspt, kstep, kinc
+      integer(c_size_t), value, intent(in) :: cmname_len
+    end subroutine rve_umat
+
     ! Static NUL-terminated "major.minor.patch": use rve_version_f.
     function rve_version() bind(c, name="rve_version") result(version)
       import :: c_ptr
@@ -312,10 +345,31 @@ module rve
   end interface
 
   ! ---- Fortran convenience wrappers ----
-  public :: rve_init_file_f, rve_init_text_f, rve_update_f, rve_last_error_f, &
+  public :: rve_init_f, rve_init_file_f, rve_init_text_f, rve_update_f, rve_last_error_f, &
       rve_status_message_f, rve_version_f
 
 contains
+
+  ! rve_init with a Fortran string (trailing blanks removed, NUL appended), or without
+  ! scene_path (call rve_init_f(handle=h)) for the paper's RVE embedded in the library.
+  function rve_init_f(scene_path, handle) result(status)
+    character(len=*), intent(in), optional :: scene_path
+    integer(c_int64_t), intent(inout) :: handle
+    integer(c_int32_t) :: status
+    character(kind=c_char), allocatable, target :: path(:)
+    integer :: i, n
+    if (present(scene_path)) then
+      n = len_trim(scene_path)
+      allocate (path(n + 1))
+      do i = 1, n
+        path(i) = scene_path(i:i)
+      end do
+      path(n + 1) = c_null_char
+      status = rve_init(c_loc(path), handle)
+    else
+      status = rve_init(c_null_ptr, handle)
+    end if
+  end function rve_init_f
 
   ! rve_init_file with a Fortran string: trailing blanks removed, NUL appended.
   function rve_init_file_f(path, handle) result(status)

@@ -160,6 +160,21 @@ uint32_t rve_update_batch(const RveHandle *handles,
 // NUL-terminated) for the duration of the call.
 size_t rve_last_error(char *buf, size_t len);
 
+// Creates an instance and writes its handle to `*out_handle`: from the scene file
+// `scene_path` (NUL-terminated; exactly `rve_init_file`), or, when `scene_path` is NULL,
+// from the paper's RVE embedded in the library (`scenes/paper_rve.toml`: section 5.2,
+// plane stress, periodic; the scene `rve run` uses by default). Instances of one scene
+// share one model.
+//
+// Returns `OK`, `NULL_ARGUMENT` (`out_handle` is NULL), `BAD_SCENE`, `MESH_FAILED` or
+// `PANIC`. `*out_handle` is written only on success; release the instance with
+// `rve_free`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_init(const char *scene_path, RveHandle *out_handle);
+
 // Creates an instance from the scene file `path` (NUL-terminated; TOML) and writes its
 // handle to `*out_handle`. Relative paths inside the scene (`geometry.file`) resolve
 // against the scene file's directory. Instances of one scene share one immutable model
@@ -324,6 +339,76 @@ uint64_t rve_model_builds(void);
 // unknown codes give "unknown status code". Never NULL; the caller must not free it.
 // For the detailed message of the last failure on this thread see `rve_last_error`.
 const char *rve_status_message(uint32_t code);
+
+// The UMAT of the RVE, with the Abaqus argument list (every argument by reference, as
+// Fortran passes it, then the hidden length of `CMNAME`). See the README, "Use it from
+// an FE code", for the rules; in short:
+// - `NTENS` 3 (`NDI` 2, `NSHR` 1: plane stress `[11, 22, 12]`), 4 (`NDI` 3, `NSHR` 1:
+//   plane strain `[11, 22, 33, 12]`) or 6 (`NDI` 3, `NSHR` 3: a 3D element held in
+//   plane strain), engineering shear; out-of-plane strains must be zero;
+// - `CMNAME` names the scene: `<SCENE>[@TAG]`, or `@ABAQUS_<LIB>_<FUNC>@<SCENE>[@TAG]`
+//   for CalculiX; `<SCENE>.toml` (or its lower-case name) is searched in the directories
+//   of `MESORVE_SCENE_PATH` (`:`-separated; default: the working directory); no scene
+//   name is the embedded paper RVE;
+// - `PROPS(1..5)` override `materials.itz.sigma_c`, `materials.itz.delta_c`,
+//   `geometry.seed`, `materials.matrix.young`, `materials.aggregate.young` when non-zero;
+//   `PROPS(6)` = 1 returns the elastic tangent instead of the consistent one;
+// - instances live in the library per (`NOEL`, `NPT`); a new increment (`KSTEP`/`KINC`
+//   changed or `TIME(2)` advanced) commits the last trial, a cut-back (same increment
+//   after a failure or with a smaller `DTIME`) reverts;
+// - outputs: `STRESS`, `DDSDDE` (`NTENS` x `NTENS`, column-major), `STATEV(1..3)` when
+//   `NSTATV` allows (point id, RVE iterations, sub-steps; never read back); on failure
+//   `PNEWDT` < 1, a message on stderr and in `rve_last_error`, `STRESS` untouched.
+//
+// `SSE`, `SPD`, `SCD`, `RPL`, `DDSDDT`, `DRPLDE`, `DRPLDT` are not written; `TEMP`,
+// `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `CELENT`, `DFGRD0`, `DFGRD1`, `LAYER`,
+// `KSPT` are not read. Only the low 32 bits of `cmname_len` are used (gfortran passes
+// a `size_t`, CalculiX's C caller an `int`), and at most 80 characters. Distinct points
+// may be called from several threads at once.
+//
+// # Safety
+// Each pointer the call reads or writes must be valid for the documented length:
+// `STRESS`, `STRAN`, `DSTRAN` (`NTENS`), `DDSDDE` (`NTENS^2`), `STATEV` (`NSTATV`),
+// `PROPS` (`NPROPS`), `TIME` (2), `CMNAME` (`cmname_len` bytes, at most 80 read), the
+// scalars; a NULL one fails the call (`PNEWDT` set when it is not NULL itself).
+void rve_umat(double *stress,
+              double *statev,
+              double *ddsdde,
+              double *sse,
+              double *spd,
+              double *scd,
+              double *rpl,
+              double *ddsddt,
+              double *drplde,
+              double *drpldt,
+              const double *stran,
+              const double *dstran,
+              const double *time,
+              const double *dtime,
+              const double *temp,
+              const double *dtemp,
+              const double *predef,
+              const double *dpred,
+              const char *cmname,
+              const int *ndi,
+              const int *nshr,
+              const int *ntens,
+              const int *nstatv,
+              const double *props,
+              const int *nprops,
+              const double *coords,
+              const double *drot,
+              double *pnewdt,
+              const double *celent,
+              const double *dfgrd0,
+              const double *dfgrd1,
+              const int *noel,
+              const int *npt,
+              const int *layer,
+              const int *kspt,
+              const int *kstep,
+              const int *kinc,
+              size_t cmname_len);
 
 // Returns the library version as a static NUL-terminated string `"major.minor.patch"`.
 // The pointer is valid for the lifetime of the process; the caller must not free it.

@@ -78,6 +78,16 @@ pub enum Error {
     /// A state could not be encoded (a bug).
     #[error("state encoding: {reason}")]
     StateEncoding { reason: String },
+    /// A host code's call does not fit the RVE: its tensor layout (`NTENS`), an
+    /// out-of-plane strain, or a scene in the other plane state (see `crate::host`).
+    #[error("host convention: {0}")]
+    HostConvention(String),
+    /// No scene file of this name on the host's scene search path.
+    #[error("scene `{name}` not found: searched {}", searched_list(.searched))]
+    SceneNotFound {
+        name: String,
+        searched: Vec<PathBuf>,
+    },
 }
 
 impl Error {
@@ -88,6 +98,11 @@ impl Error {
             reason: reason.into(),
         }
     }
+}
+
+fn searched_list(paths: &[PathBuf]) -> String {
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    names.join(", ")
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

@@ -27,6 +27,7 @@ pub mod error;
 pub mod ffi;
 pub mod geometry;
 pub mod homogenization;
+pub mod host;
 pub mod interface;
 pub mod io;
 pub mod material;

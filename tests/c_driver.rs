@@ -21,34 +21,22 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     (header, rows)
 }
 
-#[test]
-fn c_driver_is_bit_identical_to_rve_run_on_the_cycle() {
-    // `cargo test` builds the rlib, not the cdylib the driver links: build the shared
-    // library from the same sources and stage it, so the driver never runs a stale copy.
-    let st = Command::new(env!("CARGO"))
-        .args(["build", "--release", "--lib", "--quiet"])
-        .current_dir(common::repo(""))
-        .status()
-        .unwrap();
-    assert!(st.success(), "cargo build --release --lib failed");
-    let st = Command::new(common::repo("scripts/build-c-examples"))
-        .status()
-        .unwrap();
-    assert!(st.success(), "scripts/build-c-examples failed");
+/// Runs `rve run` and the C driver on `scene` (None: the embedded paper RVE, which the
+/// driver creates with `rve_init(NULL)`) and compares every shared value bit for bit;
+/// returns the number of increments.
+fn compare(scene: Option<&Path>, tag: &str) -> usize {
     let driver = common::repo("target/c_examples/bin/rve_driver");
-    let scene = common::repo("scenes/paper_rve_cycle.toml");
-    let dir = std::env::temp_dir().join(format!("mesorve-c-driver-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("mesorve-c-driver-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let st = Command::new(env!("CARGO_BIN_EXE_rve"))
-        .args(["run", "--quiet", "--out"])
-        .arg(&dir)
-        .arg(&scene)
-        .status()
-        .unwrap();
-    assert!(st.success());
+    let mut run = Command::new(env!("CARGO_BIN_EXE_rve"));
+    run.args(["run", "--quiet", "--out"]).arg(&dir);
+    if let Some(scene) = scene {
+        run.arg(scene);
+    }
+    assert!(run.status().unwrap().success());
     let c_csv = dir.join("driver.csv");
     let st = Command::new(&driver)
-        .arg(&scene)
+        .arg(scene.unwrap_or(Path::new("-")))
         .arg(&c_csv)
         .status()
         .unwrap();
@@ -61,14 +49,13 @@ fn c_driver_is_bit_identical_to_rve_run_on_the_cycle() {
         "the driver's columns are a prefix of rve run's"
     );
     assert_eq!(ch.len(), 20);
-    assert_eq!(rust.len(), 60);
     assert_eq!(rust.len(), c.len());
     for (k, (r, c)) in rust.iter().zip(&c).enumerate() {
         for j in 0..ch.len() {
             assert_eq!(
                 r[j].to_bits(),
                 c[j].to_bits(),
-                "step {}, column {}: rve run {:e}, C driver {:e}",
+                "{tag}, step {}, column {}: rve run {:e}, C driver {:e}",
                 k + 1,
                 ch[j],
                 r[j],
@@ -77,4 +64,25 @@ fn c_driver_is_bit_identical_to_rve_run_on_the_cycle() {
         }
     }
     std::fs::remove_dir_all(&dir).ok();
+    rust.len()
+}
+
+#[test]
+fn c_driver_is_bit_identical_to_rve_run_on_the_cycle_and_the_embedded_scene() {
+    // `cargo test` builds the rlib, not the cdylib the driver links: build the shared
+    // library from the same sources and stage it, so the driver never runs a stale copy.
+    let st = Command::new(env!("CARGO"))
+        .args(["build", "--release", "--lib", "--quiet"])
+        .current_dir(common::repo(""))
+        .status()
+        .unwrap();
+    assert!(st.success(), "cargo build --release --lib failed");
+    let st = Command::new(common::repo("scripts/build-c-examples"))
+        .status()
+        .unwrap();
+    assert!(st.success(), "scripts/build-c-examples failed");
+    let cycle = common::repo("scenes/paper_rve_cycle.toml");
+    assert_eq!(compare(Some(&cycle), "cycle"), 60);
+    // rve_init(NULL): the embedded scene, the one `rve run` solves without an argument.
+    assert_eq!(compare(None, "embedded"), 20);
 }

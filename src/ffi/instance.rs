@@ -7,10 +7,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::boundary::{guard, out, slice, slice_mut, Failure, FfiResult};
-use super::cache;
 use super::registry::{self, Entry};
 use super::status::RveStatus;
-use super::workspace::with_workspace;
+use crate::model::cache;
+use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Model, Response};
 use crate::solver::TangentRequest;
 

@@ -11,17 +11,18 @@
 
 mod batch;
 mod boundary;
-mod cache;
+mod init;
 mod instance;
 mod registry;
 mod status;
+mod umat;
 mod version;
-mod workspace;
 
+pub use crate::model::cache::model_builds;
 pub use crate::state::STATE_FORMAT_VERSION;
 pub use batch::rve_update_batch;
 pub use boundary::rve_last_error;
-pub use cache::model_builds;
+pub use init::rve_init;
 pub use instance::{
     rve_clone_model, rve_commit, rve_free, rve_init_file, rve_init_text, rve_model_builds,
     rve_path_len, rve_path_point, rve_reset, rve_revert, rve_state_load, rve_state_save,
@@ -30,6 +31,7 @@ pub use instance::{
 };
 pub use registry::live_instances;
 pub use status::{rve_status_message, RveStatus, ALL_STATUSES};
+pub use umat::rve_umat;
 pub use version::{rve_abi_version, rve_version, rve_version_number};
 
 /// ABI version: the suffix of the soname `librve.so.<ABI_VERSION>`, also the header's

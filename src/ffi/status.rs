@@ -125,7 +125,10 @@ impl From<&Error> for RveStatus {
     /// The one mapping from the core error type to a status code.
     fn from(e: &Error) -> Self {
         match e {
-            Error::Scene { .. } | Error::SceneParse(_) | Error::Io { .. } => RveStatus::BadScene,
+            Error::Scene { .. }
+            | Error::SceneParse(_)
+            | Error::Io { .. }
+            | Error::SceneNotFound { .. } => RveStatus::BadScene,
             Error::Placement(_) | Error::Gmsh { .. } | Error::Mesh(_) => RveStatus::MeshFailed,
             Error::BadStrain { strain, .. } => {
                 if strain.iter().all(|e| e.is_finite()) {
@@ -140,6 +143,7 @@ impl From<&Error> for RveStatus {
             Error::BadState { .. } => RveStatus::BadState,
             Error::StateVersion { .. } => RveStatus::StateVersion,
             Error::StateMismatch { .. } => RveStatus::StateMismatch,
+            Error::HostConvention(_) => RveStatus::InvalidArgument,
         }
     }
 }

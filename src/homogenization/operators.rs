@@ -80,6 +80,24 @@ impl Homogenizer {
         ([s[0], s[1], s[2]], szz)
     }
 
+    /// The out-of-plane row of the consistent tangent, `d s_zz / d eps`, from
+    /// `X = K^-1 G` (n x 3, column-major) at the converged state. Differentiating
+    /// `s_zz = c_Taylor . eps + h . u~ / V` at equilibrium, where `du~/d eps = -X`:
+    ///
+    /// ```text
+    /// d s_zz / d eps_j = c_Taylor_j - (1/V) h^T X_j
+    /// ```
+    ///
+    /// the counterpart of eq. 18 for `s_zz`. Zero in plane stress (`c_Taylor = h = 0`).
+    pub fn szz_tangent(&self, kg: &[f64]) -> [f64; 3] {
+        let n = self.h_szz.len();
+        std::array::from_fn(|j| {
+            let x = &kg[j * n..(j + 1) * n];
+            self.szz_taylor[j]
+                - self.h_szz.iter().zip(x).map(|(a, b)| a * b).sum::<f64>() / self.volume
+        })
+    }
+
     /// `D_hom = D_Taylor - (1/V) G^T X` with `X = K^-1 G` (n x 3, column-major), row-major.
     pub fn tangent(&self, disc: &Discretization, kg: &[f64]) -> [f64; 9] {
         let n = disc.n();

@@ -3,10 +3,12 @@
 //! [`crate::solver::Workspace`]. `from_scene` is the edge where the scene schema becomes
 //! the numerical modules' own types.
 
+pub mod cache;
 mod from_scene;
 mod instance;
 mod microstructure;
 mod rve_model;
+pub(crate) mod workspaces;
 
 pub use instance::Instance;
 pub use microstructure::build_microstructure;

@@ -27,6 +27,9 @@ pub struct Response {
     pub tangent: [f64; 9],
     /// Out-of-plane stress (plane strain; 0 in plane stress).
     pub s_zz: f64,
+    /// `d s_zz / d strain_j`, the out-of-plane row of the consistent tangent (zeros in
+    /// plane stress and when no tangent was requested); see `Homogenizer::szz_tangent`.
+    pub s_zz_tangent: [f64; 3],
     pub report: IncrementReport,
 }
 
@@ -176,10 +179,16 @@ impl Model {
             TangentRequest::None => [0.0; 9],
         };
         let (stress, s_zz) = self.hom.stress(&self.disc, &strain, &trial.unknowns);
+        // A consistent update leaves X = K^-1 G of the converged state in the workspace.
+        let s_zz_tangent = match request {
+            TangentRequest::Consistent => self.hom.szz_tangent(ws.factorization().kg()),
+            TangentRequest::None => [0.0; 3],
+        };
         Ok(Response {
             stress,
             tangent,
             s_zz,
+            s_zz_tangent,
             report: solved.report,
         })
     }

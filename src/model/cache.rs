@@ -1,5 +1,6 @@
 //! The process-wide model cache: instances of one scene share one `Arc<Model>`, so
-//! creating 10^4 instances meshes and analyses the scene once.
+//! creating 10^4 instances meshes and analyses the scene once. The C interface
+//! (`rve_init_*`) and the UMAT (`crate::host`) share it.
 //!
 //! Keys: a file scene by its canonical path and its text (an edited file is a new
 //! scene); a text scene by its text and base directory. The cache holds weak references:
@@ -24,8 +25,8 @@ static CACHE: LazyLock<Mutex<HashMap<Key, Weak<Model>>>> =
     LazyLock::new(|| Mutex::new(HashMap::new()));
 static BUILDS: AtomicU64 = AtomicU64::new(0);
 
-/// Models built through the C interface by this process (each scene once while one of
-/// its instances lives).
+/// Models built through this cache by this process (each scene once while one of its
+/// instances lives).
 pub fn model_builds() -> u64 {
     BUILDS.load(Ordering::Relaxed)
 }

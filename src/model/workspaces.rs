@@ -1,5 +1,6 @@
-//! Per-thread workspaces, one per model a thread has used: `rve_update` allocates a
-//! workspace the first time a thread updates an instance of a model, then reuses it.
+//! Per-thread workspaces, one per model a thread has used: `rve_update` and the UMAT
+//! allocate a workspace the first time a thread updates an instance of a model, then
+//! reuse it.
 
 use std::cell::RefCell;
 use std::sync::{Arc, Weak};

@@ -1,0 +1,139 @@
+#!/usr/bin/env python3
+"""Reads CalculiX outputs of scripts/test-calculix and checks and reports them.
+
+  calculix_report.py homogeneous JOB.dat RESPONSE.csv
+      The homogeneous specimen (every node prescribed, one strain state) against `rve run`
+      on the same strain path: every increment's stress (sxx, syy, szz, sxy at every
+      integration point) must agree to TOLERANCE times the largest stress of the path.
+      ccx prints 7 significant digits, so the printed values differ from exact ones by
+      up to 5e-7 of themselves. Prints a table; exit status 1 on disagreement.
+
+  calculix_report.py specimen LABEL=JOB ... > report.md
+      Increments, attempts (cut-backs), ccx's Newton iterations per converged increment,
+      the residual history of the hardest increment, and the force-displacement curve of
+      each run, as Markdown.
+"""
+import re
+import sys
+
+TOLERANCE = 1e-6
+
+
+def dat_blocks(path, kind):
+    """{time: [[values per line]]} of the blocks `kind` ('stresses', 'forces', ...)."""
+    blocks, current = {}, None
+    with open(path) as f:
+        for line in f:
+            m = re.match(r"\s*(?:total )?(\w+) \(.*\) for set \w+ and time\s+(\S+)", line)
+            if m:
+                current = blocks.setdefault(float(m.group(2)), []) if m.group(1) == kind else None
+                continue
+            if current is not None and line.strip():
+                current.append([float(v) for v in line.split()])
+    return blocks
+
+
+def homogeneous(dat, csv):
+    stresses = dat_blocks(dat, "stresses")
+    with open(csv) as f:
+        header = f.readline().strip().split(",")
+        rows = [dict(zip(header, map(float, l.split(",")))) for l in f if l.strip()]
+    times = sorted(stresses)
+    if len(times) != len(rows):
+        sys.exit(f"homogeneous: ccx printed {len(times)} increments, rve run has {len(rows)}")
+    scale = max(abs(r[k]) for r in rows for k in ("sig_xx", "sig_yy", "s_zz", "sig_xy"))
+    worst, where = 0.0, None
+    print("| increment | eps_xx | rve run sig_xx | ccx sxx | rve run s_zz | ccx szz | max diff / max stress |")
+    print("|---|---|---|---|---|---|---|")
+    for k, (t, r) in enumerate(zip(times, rows)):
+        want = [r["sig_xx"], r["sig_yy"], r["s_zz"], r["sig_xy"]]
+        diff = 0.0
+        for ip in stresses[t]:
+            got = ip[2:6]
+            diff = max(diff, max(abs(g - w) for g, w in zip(got, want)) / scale)
+        if diff > worst:
+            worst, where = diff, k + 1
+        if k % 5 == 4 or r["limit_points"] > 0 or k == len(rows) - 1:
+            ip = stresses[t][0]
+            print(f"| {k + 1} | {r['eps_xx']:.3e} | {want[0]:.6e} | {ip[2]:.6e} | "
+                  f"{want[2]:.6e} | {ip[4]:.6e} | {diff:.1e} |")
+    print(f"\nlargest difference: {worst:.1e} of the largest stress ({scale:.3f}), "
+          f"increment {where}; tolerance {TOLERANCE:.0e}")
+    if worst > TOLERANCE:
+        sys.exit(1)
+
+
+def sta(job):
+    """[(step, inc, attempt, converged, iterations)] from JOB.sta."""
+    out = []
+    with open(job + ".sta") as f:
+        for line in f:
+            m = re.match(r"\s*(\d+)\s+(\d+)\s+(\d+)(U?)\s+(\d+)\s", line)
+            if m:
+                out.append((int(m.group(1)), int(m.group(2)), int(m.group(3)),
+                            m.group(4) != "U", int(m.group(5))))
+    return out
+
+
+def cvg(job):
+    """{(step, inc, attempt): [force residual % per iteration]} from JOB.cvg."""
+    out = {}
+    with open(job + ".cvg") as f:
+        for line in f:
+            v = line.split()
+            if len(v) == 9 and v[0].isdigit():
+                out.setdefault((int(v[0]), int(v[1]), int(v[2])), []).append(float(v[5]))
+    return out
+
+
+def curve(job):
+    """[(time, U, F)]: the loaded face's displacement and total reaction per increment."""
+    forces = dat_blocks(job + ".dat", "force")
+    disp = dat_blocks(job + ".dat", "displacements")
+    return [(t, disp[t][0][2] if disp.get(t) else float("nan"), forces[t][0][1])
+            for t in sorted(forces)]
+
+
+def specimen(runs):
+    print("| run | finished | increments | attempts cut back | ccx iterations | "
+          "iterations per increment (median / max) | wall time |")
+    print("|---|---|---|---|---|---|---|")
+    for label, job, seconds, finished in runs:
+        rows = sta(job)
+        conv = [r for r in rows if r[3]]
+        cut = [r for r in rows if not r[3]]
+        its = sorted(r[4] for r in conv)
+        median = its[len(its) // 2] if its else 0
+        print(f"| {label} | {finished} | {len(conv)} | {len(cut)} | "
+              f"{sum(r[4] for r in rows)} | {median} / {max(its, default=0)} | {seconds} s |")
+    for label, job, _, _ in runs:
+        rows = sta(job)
+        res = cvg(job)
+        conv = [r for r in rows if r[3]]
+        if not conv:
+            continue
+        hard = max(conv, key=lambda r: r[4])
+        seq = res.get((hard[0], hard[1], hard[2]), [])
+        print(f"\n{label}: the converged increment with the most iterations (step {hard[0]}, "
+              f"increment {hard[1]}, attempt {hard[2]}): force residuals (%) "
+              + ", ".join(f"{v:.2e}" for v in seq))
+    for label, job, _, _ in runs:
+        print(f"\n{label}: force-displacement (every increment)\n")
+        print("| time | U (mm) | F (N) |")
+        print("|---|---|---|")
+        for t, u, f in curve(job):
+            print(f"| {t:.4f} | {u:.5e} | {f:.4e} |")
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "homogeneous":
+        homogeneous(sys.argv[2], sys.argv[3])
+    elif sys.argv[1] == "specimen":
+        runs = []
+        for arg in sys.argv[2:]:
+            label, job, seconds, finished = arg.split("=", 1)[1:] and (
+                arg.split("=")[0], *arg.split("=", 1)[1].split(","))
+            runs.append((label, job, seconds, finished))
+        specimen(runs)
+    else:
+        sys.exit(__doc__)

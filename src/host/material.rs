@@ -1,0 +1,365 @@
+//! A host's material: the RVE scene that the material name (`CMNAME`) selects on a search
+//! path, with documented scene keys overridden by the material constants (`PROPS`).
+//!
+//! **Scene name.** Trailing blanks and NULs of `CMNAME` (Fortran padding) are dropped.
+//! A name that starts with `@` is CalculiX's external-behaviour selector
+//! (`@ABAQUS_<LIB>_<FUNC>`): that first `@` field is dropped. The scene name is then the
+//! text up to the next `@`; what follows it is a free tag that makes material names
+//! distinct (two materials of one scene with different `PROPS`):
+//!
+//! | `CMNAME` | scene name |
+//! |---|---|
+//! | `CONCRETE` | `CONCRETE` |
+//! | `CONCRETE@WEAK` | `CONCRETE` |
+//! | `@ABAQUS_RVE_UMAT@CONCRETE` | `CONCRETE` |
+//! | `@ABAQUS_RVE_UMAT@CONCRETE@WEAK` | `CONCRETE` |
+//! | `@ABAQUS_RVE_UMAT` | none: the embedded paper RVE |
+//!
+//! A scene name has ASCII letters, digits, `_`, `-` and `.` only, and does not start
+//! with `.`.
+//!
+//! **Search path.** The environment variable [`SCENE_PATH_VAR`] (`MESORVE_SCENE_PATH`)
+//! lists directories separated by `:`; unset or empty, the working directory. In each
+//! directory in turn, `<name>.toml` and then `<lowercase name>.toml` are tried (hosts
+//! such as CalculiX and Abaqus upper-case material names). No match is
+//! [`Error::SceneNotFound`], which lists every path tried.
+//!
+//! **`PROPS`.** `PROPS(k)` = 0 (or `NPROPS < k`) keeps the scene's value; any other value
+//! overrides the key of [`PROPS_KEYS`]:
+//!
+//! | `PROPS` | meaning |
+//! |---|---|
+//! | 1 | `materials.itz.sigma_c` |
+//! | 2 | `materials.itz.delta_c` |
+//! | 3 | `geometry.seed` (a random geometry; an integer) |
+//! | 4 | `materials.matrix.young` |
+//! | 5 | `materials.aggregate.young` |
+//! | 6 | the tangent returned in `DDSDDE`: 0 the consistent one, 1 the elastic tangent of the virgin RVE |
+//!
+//! A non-zero `PROPS(k)` for `k > 6` is refused. Overridden scenes are built from the
+//! edited scene text (relative paths still resolve against the scene file's directory);
+//! the same scene with the same overrides is meshed once per process.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::hypothesis::PlaneResponse;
+use crate::error::{Error, Result};
+use crate::model::{cache, Model};
+use crate::scene::DEFAULT_SCENE_TOML;
+
+/// The environment variable that lists the directories searched for scene files.
+pub const SCENE_PATH_VAR: &str = "MESORVE_SCENE_PATH";
+
+/// The scene keys that `PROPS(1..=5)` override, in order.
+pub const PROPS_KEYS: [&str; 5] = [
+    "materials.itz.sigma_c",
+    "materials.itz.delta_c",
+    "geometry.seed",
+    "materials.matrix.young",
+    "materials.aggregate.young",
+];
+
+/// Position (1-based) of the tangent choice in `PROPS`.
+pub const PROPS_TANGENT: usize = 6;
+
+/// Directories searched for scene files, in order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SearchPath(Vec<PathBuf>);
+
+impl SearchPath {
+    pub fn new(dirs: impl IntoIterator<Item = PathBuf>) -> Self {
+        let dirs: Vec<PathBuf> = dirs
+            .into_iter()
+            .filter(|d| !d.as_os_str().is_empty())
+            .collect();
+        if dirs.is_empty() {
+            SearchPath(vec![PathBuf::from(".")])
+        } else {
+            SearchPath(dirs)
+        }
+    }
+
+    /// From [`SCENE_PATH_VAR`] (`:`-separated); the working directory when unset.
+    pub fn from_env() -> Self {
+        match std::env::var_os(SCENE_PATH_VAR) {
+            Some(v) => SearchPath::new(std::env::split_paths(&v)),
+            None => SearchPath::new([]),
+        }
+    }
+
+    pub fn dirs(&self) -> &[PathBuf] {
+        &self.0
+    }
+
+    /// The first `<name>.toml` or `<lowercase name>.toml` in the directories.
+    pub fn find(&self, name: &str) -> Result<PathBuf> {
+        let lower = name.to_ascii_lowercase();
+        let mut searched = Vec::new();
+        for dir in &self.0 {
+            for candidate in [name, lower.as_str()] {
+                let path = dir.join(format!("{candidate}.toml"));
+                if searched.contains(&path) {
+                    continue;
+                }
+                if path.is_file() {
+                    return Ok(path);
+                }
+                searched.push(path);
+            }
+        }
+        Err(Error::SceneNotFound {
+            name: name.to_string(),
+            searched,
+        })
+    }
+}
+
+/// The scene name inside a material name (see the module documentation); `None` for the
+/// embedded paper RVE.
+pub fn scene_name(cmname: &str) -> Result<Option<&str>> {
+    let name = cmname.trim_end_matches([' ', '\0']);
+    let rest = match name.strip_prefix('@') {
+        Some(selector) => selector.split_once('@').map_or("", |(_, r)| r),
+        None => name,
+    };
+    let scene = rest.split('@').next().unwrap_or("");
+    if scene.is_empty() {
+        return Ok(None);
+    }
+    let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.');
+    if scene.starts_with('.') || !scene.chars().all(allowed) {
+        return Err(Error::HostConvention(format!(
+            "material name `{name}`: the scene name `{scene}` may hold ASCII letters, digits, \
+             `_`, `-` and `.` only, and may not start with `.`"
+        )));
+    }
+    Ok(Some(scene))
+}
+
+/// The tangent a material returns in `DDSDDE`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TangentChoice {
+    /// The consistent tangent of the converged RVE (eq. 18).
+    Consistent,
+    /// The elastic tangent of the virgin RVE: no tangent solve; the host's Newton
+    /// converges linearly.
+    Elastic,
+}
+
+/// A resolved material: its model, the tangent it returns and its elastic response.
+#[derive(Debug)]
+pub struct Material {
+    pub model: Arc<Model>,
+    pub tangent: TangentChoice,
+    /// The virgin RVE's tangent and `d s_zz / d eps` (stress and `s_zz` zero).
+    pub elastic: PlaneResponse,
+    /// Where the scene came from and what `PROPS` overrode, for messages.
+    pub source: String,
+}
+
+impl Material {
+    /// Resolves a material name and its constants (see the module documentation).
+    pub fn resolve(cmname: &str, props: &[f64], path: &SearchPath) -> Result<Material> {
+        let overrides = overrides(props)?;
+        let tangent = tangent_choice(props)?;
+        let file = scene_name(cmname)?.map(|n| path.find(n)).transpose()?;
+        let mut source = match &file {
+            Some(f) => format!("scene {}", f.display()),
+            None => "the embedded paper RVE".to_string(),
+        };
+        let model = if overrides.is_empty() {
+            match &file {
+                Some(f) => cache::model_for_file(f)?,
+                None => cache::model_for_text(DEFAULT_SCENE_TOML, None)?,
+            }
+        } else {
+            let (text, base) = match &file {
+                Some(f) => {
+                    let text = std::fs::read_to_string(f).map_err(|source| Error::Io {
+                        path: f.clone(),
+                        source,
+                    })?;
+                    (text, f.parent().map(Path::to_path_buf))
+                }
+                None => (DEFAULT_SCENE_TOML.to_string(), None),
+            };
+            for (k, key, value) in &overrides {
+                source += &format!(", PROPS({k}) {key} = {value}");
+            }
+            let edited = apply_overrides(&text, &overrides)?;
+            cache::model_for_text(&edited, base.as_deref())?
+        };
+        let x_el: Vec<f64> = model.elastic_sensitivity.iter().map(|v| -v).collect();
+        let elastic = PlaneResponse {
+            stress: [0.0; 3],
+            tangent: model.elastic_tangent,
+            s_zz: 0.0,
+            s_zz_tangent: model.hom.szz_tangent(&x_el),
+        };
+        Ok(Material {
+            model,
+            tangent,
+            elastic,
+            source,
+        })
+    }
+}
+
+/// `(k, key, value)` for every non-zero `PROPS(k)`, `k` in `1..=5`.
+fn overrides(props: &[f64]) -> Result<Vec<(usize, &'static str, f64)>> {
+    let mut out = Vec::new();
+    for (i, &v) in props.iter().enumerate() {
+        let k = i + 1;
+        if v == 0.0 {
+            continue;
+        }
+        let prop = |reason: String| Error::scene(format!("PROPS({k})"), reason);
+        if !v.is_finite() {
+            return Err(prop(format!("{v} is not a finite number")));
+        }
+        match PROPS_KEYS.get(i) {
+            Some(&key) => out.push((k, key, v)),
+            None if k == PROPS_TANGENT => {}
+            None => {
+                return Err(prop(format!(
+                    "{v}: only PROPS(1..={PROPS_TANGENT}) have a meaning ({}, tangent)",
+                    PROPS_KEYS.join(", ")
+                )))
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn tangent_choice(props: &[f64]) -> Result<TangentChoice> {
+    match props.get(PROPS_TANGENT - 1).copied().unwrap_or(0.0) {
+        0.0 => Ok(TangentChoice::Consistent),
+        1.0 => Ok(TangentChoice::Elastic),
+        v => Err(Error::scene(
+            format!("PROPS({PROPS_TANGENT})"),
+            format!("{v}: the tangent is 0 (consistent) or 1 (elastic)"),
+        )),
+    }
+}
+
+/// The scene text with `overrides` applied (TOML re-serialized; comments dropped).
+fn apply_overrides(text: &str, overrides: &[(usize, &'static str, f64)]) -> Result<String> {
+    let mut table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| Error::SceneParse(e.to_string()))?;
+    for &(k, key, v) in overrides {
+        let prop = |reason: &str| Error::scene(format!("PROPS({k}) ({key})"), reason);
+        let value = if key == "geometry.seed" {
+            let kind = table
+                .get("geometry")
+                .and_then(|g| g.get("kind"))
+                .and_then(toml::Value::as_str);
+            if kind != Some("random") {
+                return Err(prop("the scene's geometry is not `kind = \"random\"`"));
+            }
+            if v < 0.0 || v.fract() != 0.0 || v >= 2f64.powi(53) {
+                return Err(prop("a seed is a non-negative integer"));
+            }
+            toml::Value::Integer(v as i64)
+        } else {
+            toml::Value::Float(v)
+        };
+        let (parents, leaf) = key.rsplit_once('.').expect("keys are dotted");
+        let mut node = &mut table;
+        for part in parents.split('.') {
+            node = node
+                .get_mut(part)
+                .and_then(toml::Value::as_table_mut)
+                .ok_or_else(|| prop(&format!("the scene has no `{parents}` to override")))?;
+        }
+        node.insert(leaf.to_string(), value);
+    }
+    toml::to_string(&table).map_err(|e| Error::SceneParse(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scene_names_follow_the_documented_rule() {
+        let cases = [
+            ("CONCRETE", Some("CONCRETE")),
+            ("CONCRETE@WEAK   ", Some("CONCRETE")),
+            ("@ABAQUS_RVE_UMAT@CONCRETE", Some("CONCRETE")),
+            ("@ABAQUS_RVE_UMAT@PAPER_RVE@2\0\0", Some("PAPER_RVE")),
+            ("@ABAQUS_RVE_UMAT", None),
+            ("@ABAQUS_RVE_UMAT@", None),
+            ("", None),
+            ("   ", None),
+            ("a.b-c_1", Some("a.b-c_1")),
+        ];
+        for (cmname, want) in cases {
+            assert_eq!(scene_name(cmname).unwrap(), want, "{cmname:?}");
+        }
+        for bad in [
+            "../etc/passwd",
+            "a/b",
+            "@ABAQUS_RVE_UMAT@..",
+            "x y",
+            "sc\u{e9}ne",
+        ] {
+            let e = scene_name(bad).unwrap_err();
+            assert!(matches!(e, Error::HostConvention(_)), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn props_are_checked() {
+        assert!(overrides(&[0.0; 6]).unwrap().is_empty());
+        let o = overrides(&[3.0, 0.0, 5.0]).unwrap();
+        assert_eq!(
+            o,
+            vec![(1, "materials.itz.sigma_c", 3.0), (3, "geometry.seed", 5.0)]
+        );
+        let e = overrides(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0]).unwrap_err();
+        assert!(e.to_string().contains("PROPS(7)"), "{e}");
+        let e = overrides(&[f64::NAN]).unwrap_err();
+        assert!(e.to_string().contains("PROPS(1)"), "{e}");
+        assert_eq!(tangent_choice(&[]).unwrap(), TangentChoice::Consistent);
+        assert_eq!(
+            tangent_choice(&[0.0; 6]).unwrap(),
+            TangentChoice::Consistent
+        );
+        let mut p = [0.0; 6];
+        p[5] = 1.0;
+        assert_eq!(tangent_choice(&p).unwrap(), TangentChoice::Elastic);
+        p[5] = 0.5;
+        assert!(tangent_choice(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("PROPS(6)"));
+    }
+
+    #[test]
+    fn overrides_edit_the_named_keys() {
+        let edited = apply_overrides(
+            DEFAULT_SCENE_TOML,
+            &[
+                (1, PROPS_KEYS[0], 2.5),
+                (3, PROPS_KEYS[2], 11.0),
+                (5, PROPS_KEYS[4], 4e4),
+            ],
+        )
+        .unwrap();
+        let t: toml::Table = edited.parse().unwrap();
+        assert_eq!(t["materials"]["itz"]["sigma_c"].as_float(), Some(2.5));
+        assert_eq!(t["geometry"]["seed"].as_integer(), Some(11));
+        assert_eq!(t["materials"]["aggregate"]["young"].as_float(), Some(4e4));
+        assert_eq!(t["materials"]["matrix"]["young"].as_float(), Some(25000.0));
+        let e = apply_overrides(DEFAULT_SCENE_TOML, &[(3, PROPS_KEYS[2], 1.5)]).unwrap_err();
+        assert!(e.to_string().contains("non-negative integer"), "{e}");
+        let homogeneous = "[cell]\nsize = [1.0, 1.0]\nanalysis = \"plane_strain\"\n\
+                           [geometry]\nkind = \"homogeneous\"\n";
+        let e = apply_overrides(homogeneous, &[(3, PROPS_KEYS[2], 2.0)]).unwrap_err();
+        assert!(e.to_string().contains("kind = \"random\""), "{e}");
+        let e = apply_overrides(homogeneous, &[(1, PROPS_KEYS[0], 2.0)]).unwrap_err();
+        assert!(e.to_string().contains("no `materials.itz`"), "{e}");
+    }
+}

@@ -1,0 +1,18 @@
+//! Host adaptors: how finite element codes call the RVE. Pure safe Rust over
+//! [`crate::model`] and [`crate::scene`]; `crate::ffi` exports it.
+//!
+//! - [`hypothesis`]: the one place that maps a host's stress and strain vectors (Abaqus
+//!   `NTENS` 3, 4 or 6, engineering shear) to the RVE's plane state and back, `s_zz` and
+//!   `DDSDDE` included;
+//! - [`material`]: the scene a material name selects on a search path, with `PROPS`
+//!   overrides;
+//! - [`umat`]: the Abaqus UMAT: instances per (element, integration point), committed and
+//!   reverted by the host's increments.
+
+pub mod hypothesis;
+pub mod material;
+pub mod umat;
+
+pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};
+pub use material::{Material, SearchPath, TangentChoice, SCENE_PATH_VAR};
+pub use umat::{global, Outcome, Umat, UmatCall, UmatFailure, UmatOutputs, UmatStats};

@@ -1,0 +1,518 @@
+//! The standard Abaqus UMAT, safe side: a table of RVE instances keyed by (element,
+//! integration point) that follows the host's increments. `crate::ffi` exports it with
+//! the Abaqus argument list (`rve_umat`, `umat_`, `UMAT`) and only translates pointers.
+//!
+//! **Instances.** The first call for `(NOEL, NPT)` resolves the material (`CMNAME` and
+//! `PROPS`, see [`super::material`]) and creates a virgin instance of its model; the
+//! instance lives in the table until the process ends. `STATEV` is not needed: CalculiX
+//! hands the UMAT `STATEV` at its start-of-increment value on every call, so a handle
+//! written there during the first increment would be lost. When `NSTATV` allows,
+//! `STATEV(1)` receives the point's id in the table (1, 2, ... in creation order),
+//! `STATEV(2)` the RVE's Newton iterations and `STATEV(3)` its sub-steps, for
+//! inspection; the library never reads them.
+//!
+//! **Increments.** A call belongs to the increment `(KSTEP, KINC, TIME(2))`, `TIME(2)`
+//! being the total time at its start. Every call is a trial from the point's committed
+//! state at the total strain `STRAN + DSTRAN`. Then:
+//! - a call of a new increment (`KSTEP` or `KINC` changed, or `TIME(2)` advanced beyond
+//!   round-off) first commits the point's last trial, which is the converged state of the
+//!   previous increment when the host's last call there was at its converged strain (as
+//!   in Abaqus/Standard and CalculiX);
+//! - a call of the same increment after this point failed (the host cut back on our
+//!   `PNEWDT`), or with a smaller `DTIME` (the host cut back for another reason), reverts:
+//!   the trial is dropped and the committed state stays;
+//! - a call at the same strain, bit for bit, as the point's current trial returns that
+//!   trial's answer without solving again (CalculiX calls twice per iteration, for the
+//!   stress and for the stiffness).
+//!
+//! Limits of the rule: a host that calls a point after convergence at another strain
+//! (a perturbation for a numerical tangent, a line-search probe) before the next
+//! increment makes that trial the one committed; a host that moves on to a new increment
+//! after the point's last call failed (ignoring `PNEWDT`) commits nothing for it, and the
+//! point stays at its last converged state; `DROT`, `DFGRD*`, temperatures and field
+//! variables are ignored (small strains, the RVE's axes are the host's material axes);
+//! `SSE`, `SPD`, `SCD`, `RPL` and the thermal derivatives are not written.
+//!
+//! **Failures** (a missing scene, a host convention the RVE cannot answer, a solver
+//! failure) never panic across the boundary: `PNEWDT` receives a ratio below 1 (the
+//! solver's suggestion after a solver failure, [`FAILURE_STEP_RATIO`] otherwise),
+//! `DDSDDE` the elastic tangent when the material is known (zero otherwise), `STRESS` is
+//! left as it came, and [`UmatFailure`] says what went wrong; the C shim prints it on
+//! stderr and keeps it for `rve_last_error`.
+//!
+//! **Threads.** Distinct points may be called from several threads at once (each thread
+//! keeps one workspace per model). One point from two threads at once is refused with
+//! `Error::HostConvention` (a host never does that within an increment).
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, LazyLock, Mutex, PoisonError, RwLock, TryLockError};
+
+use super::hypothesis::{Hypothesis, PlaneResponse};
+use super::material::{Material, SearchPath, TangentChoice};
+use crate::error::Error;
+use crate::model::workspaces::with_workspace;
+use crate::model::{Instance, Response};
+use crate::solver::TangentRequest;
+
+/// `PNEWDT` after a failure other than the solver's (which suggests its own ratio).
+pub const FAILURE_STEP_RATIO: f64 = 0.25;
+
+/// Relative round-off of `TIME(2)` tolerated within one increment: CalculiX computes it
+/// as `(t + dt) - dt`, which moves by an ulp when a cut-back changes `dt`.
+const TIME_ROUNDOFF: f64 = 1e-9;
+
+/// The arguments of one UMAT call that the RVE uses (Abaqus names).
+#[derive(Clone, Copy, Debug)]
+pub struct UmatCall<'a> {
+    /// `CMNAME`, padding included or not.
+    pub cmname: &'a str,
+    /// `PROPS(1:NPROPS)`.
+    pub props: &'a [f64],
+    /// From `NDI`, `NSHR`, `NTENS`.
+    pub hypothesis: Hypothesis,
+    /// `STRAN(1:NTENS)`: total strain at the start of the increment, engineering shear.
+    pub stran: &'a [f64],
+    /// `DSTRAN(1:NTENS)`: strain increment.
+    pub dstran: &'a [f64],
+    /// `TIME(1:2)`: step time and total time at the start of the increment.
+    pub time: [f64; 2],
+    pub dtime: f64,
+    pub noel: i32,
+    pub npt: i32,
+    pub kstep: i32,
+    pub kinc: i32,
+}
+
+/// The outputs of one UMAT call.
+#[derive(Debug)]
+pub struct UmatOutputs<'a> {
+    /// `STRESS(1:NTENS)`.
+    pub stress: &'a mut [f64],
+    /// `DDSDDE(1:NTENS, 1:NTENS)`, column-major.
+    pub ddsdde: &'a mut [f64],
+    /// `STATEV(1:NSTATV)` (mirrors only).
+    pub statev: &'a mut [f64],
+    /// Written only on failure.
+    pub pnewdt: &'a mut f64,
+}
+
+/// What a successful call did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Outcome {
+    /// True when it solved the RVE; false when it repeated the point's trial.
+    pub solved: bool,
+    /// It committed the previous increment's trial first.
+    pub committed: bool,
+    /// It dropped the trial of a cut-back increment first.
+    pub reverted: bool,
+    /// RVE Newton iterations of the answer (of the repeated trial when not solved).
+    pub iterations: u32,
+}
+
+/// Why a call failed, with what the host receives in `PNEWDT`.
+#[derive(Clone, Debug)]
+pub struct UmatFailure {
+    pub noel: i32,
+    pub npt: i32,
+    pub cmname: String,
+    pub error: Arc<Error>,
+    pub pnewdt: f64,
+    /// False when this material's error was reported before: print it once.
+    pub first_report: bool,
+}
+
+impl std::fmt::Display for UmatFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "element {}, point {}, material `{}`: {} (PNEWDT = {})",
+            self.noel, self.npt, self.cmname, self.error, self.pnewdt
+        )
+    }
+}
+
+/// Counters of a table since its creation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UmatStats {
+    pub calls: u64,
+    /// RVE updates solved.
+    pub solves: u64,
+    /// Calls answered from the point's trial (same strain).
+    pub repeats: u64,
+    /// Trials committed at the start of a new increment.
+    pub commits: u64,
+    /// Trials dropped on a cut-back.
+    pub reverts: u64,
+    pub failures: u64,
+    /// Points in the table.
+    pub points: u64,
+}
+
+/// A material as a host names it: `CMNAME` without padding and the bits of `PROPS`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+struct MaterialKey {
+    cmname: String,
+    props: Vec<u64>,
+}
+
+impl MaterialKey {
+    fn of(c: &UmatCall) -> Self {
+        MaterialKey {
+            cmname: trim(c.cmname).to_string(),
+            props: c.props.iter().map(|v| v.to_bits()).collect(),
+        }
+    }
+
+    fn matches(&self, c: &UmatCall) -> bool {
+        self.cmname == trim(c.cmname)
+            && self
+                .props
+                .iter()
+                .copied()
+                .eq(c.props.iter().map(|v| v.to_bits()))
+    }
+}
+
+fn trim(cmname: &str) -> &str {
+    cmname.trim_end_matches([' ', '\0'])
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Increment {
+    kstep: i32,
+    kinc: i32,
+    /// `TIME(2)`.
+    start: f64,
+}
+
+/// One integration point.
+struct Point {
+    id: u64,
+    key: MaterialKey,
+    material: Arc<Material>,
+    instance: Instance,
+    /// The increment of the last call.
+    increment: Option<Increment>,
+    dtime: f64,
+    /// The strain and answer of the instance's trial (`Some` exactly when it has one).
+    last: Option<([f64; 3], Response)>,
+    /// The last call failed.
+    failed: bool,
+}
+
+impl Point {
+    /// Applies the increment protocol before a call of `inc`; returns (committed,
+    /// reverted).
+    fn advance(&mut self, inc: Increment, dtime: f64) -> crate::Result<(bool, bool)> {
+        let (mut committed, mut reverted) = (false, false);
+        if let Some(prev) = self.increment {
+            let advanced = inc.start - prev.start > TIME_ROUNDOFF * (prev.start.abs() + self.dtime);
+            let same = prev.kstep == inc.kstep && prev.kinc == inc.kinc && !advanced;
+            if !same {
+                if self.last.take().is_some() {
+                    self.instance.commit()?;
+                    committed = true;
+                }
+            } else if self.failed || dtime < self.dtime * (1.0 - TIME_ROUNDOFF) {
+                self.instance.revert();
+                self.last = None;
+                reverted = true;
+            }
+        }
+        self.increment = Some(inc);
+        self.dtime = dtime;
+        self.failed = false;
+        Ok((committed, reverted))
+    }
+}
+
+type MaterialEntry = Result<Arc<Material>, Arc<Error>>;
+type PointRef = Arc<Mutex<Point>>;
+
+/// A failed call before it is reported: the error, whether it is reported for the first
+/// time, and the material when known (for the elastic DDSDDE).
+struct Failed {
+    error: Arc<Error>,
+    first: bool,
+    material: Option<Arc<Material>>,
+}
+
+/// The table of a host's integration points.
+pub struct Umat {
+    search: SearchPath,
+    materials: Mutex<HashMap<MaterialKey, MaterialEntry>>,
+    points: RwLock<HashMap<(i32, i32), PointRef>>,
+    next_id: AtomicU64,
+    calls: AtomicU64,
+    solves: AtomicU64,
+    repeats: AtomicU64,
+    commits: AtomicU64,
+    reverts: AtomicU64,
+    failures: AtomicU64,
+}
+
+/// The process's table, searching scenes on `MESORVE_SCENE_PATH` (read at the first
+/// call); the one the exported `umat_` uses.
+pub fn global() -> &'static Umat {
+    static GLOBAL: LazyLock<Umat> = LazyLock::new(|| Umat::new(SearchPath::from_env()));
+    &GLOBAL
+}
+
+impl Umat {
+    pub fn new(search: SearchPath) -> Self {
+        Umat {
+            search,
+            materials: Mutex::new(HashMap::new()),
+            points: RwLock::new(HashMap::new()),
+            next_id: AtomicU64::new(1),
+            calls: AtomicU64::new(0),
+            solves: AtomicU64::new(0),
+            repeats: AtomicU64::new(0),
+            commits: AtomicU64::new(0),
+            reverts: AtomicU64::new(0),
+            failures: AtomicU64::new(0),
+        }
+    }
+
+    pub fn search_path(&self) -> &SearchPath {
+        &self.search
+    }
+
+    pub fn stats(&self) -> UmatStats {
+        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
+        UmatStats {
+            calls: get(&self.calls),
+            solves: get(&self.solves),
+            repeats: get(&self.repeats),
+            commits: get(&self.commits),
+            reverts: get(&self.reverts),
+            failures: get(&self.failures),
+            points: self
+                .points
+                .read()
+                .unwrap_or_else(PoisonError::into_inner)
+                .len() as u64,
+        }
+    }
+
+    /// One UMAT call: see the module documentation.
+    pub fn call(&self, c: &UmatCall, out: &mut UmatOutputs) -> Result<Outcome, UmatFailure> {
+        self.calls.fetch_add(1, Ordering::Relaxed);
+        self.call_inner(c, out).map_err(|f| {
+            self.failures.fetch_add(1, Ordering::Relaxed);
+            self.fail(c, out, f.error, f.first, f.material.as_deref())
+        })
+    }
+
+    fn call_inner(&self, c: &UmatCall, out: &mut UmatOutputs) -> Result<Outcome, Failed> {
+        let plain = |e: Error| Failed {
+            error: Arc::new(e),
+            first: true,
+            material: None,
+        };
+        check_lengths(c, out).map_err(plain)?;
+        let point = self.point(c).map_err(|(error, first)| Failed {
+            error,
+            first,
+            material: None,
+        })?;
+        let mut p = match point.try_lock() {
+            Ok(p) => p,
+            Err(TryLockError::WouldBlock) => {
+                return Err(plain(Error::HostConvention(format!(
+                    "element {}, point {} is being updated by another thread",
+                    c.noel, c.npt
+                ))))
+            }
+            Err(TryLockError::Poisoned(poisoned)) => {
+                // A panic during an earlier call: the committed state is only replaced by
+                // a whole swap, so it is intact; the trial is not.
+                point.clear_poison();
+                let mut p = poisoned.into_inner();
+                p.instance.revert();
+                p.last = None;
+                p.failed = true;
+                p
+            }
+        };
+        let material = p.material.clone();
+        let with_material = |e: Error| Failed {
+            error: Arc::new(e),
+            first: true,
+            material: Some(material.clone()),
+        };
+        if !p.key.matches(c) {
+            return Err(plain(Error::HostConvention(format!(
+                "element {}, point {} was created for material `{}` with other PROPS or \
+                 another name; a point keeps its material",
+                c.noel, c.npt, p.key.cmname
+            ))));
+        }
+        let inc = Increment {
+            kstep: c.kstep,
+            kinc: c.kinc,
+            start: c.time[1],
+        };
+        let (committed, reverted) = p.advance(inc, c.dtime).map_err(with_material)?;
+        self.commits.fetch_add(committed as u64, Ordering::Relaxed);
+        self.reverts.fetch_add(reverted as u64, Ordering::Relaxed);
+        let h = c.hypothesis;
+        let (r, solved) = match self.answer(&mut p, c) {
+            Ok(a) => a,
+            Err(e) => {
+                p.failed = true;
+                return Err(with_material(e));
+            }
+        };
+        let mut plane = PlaneResponse::from(&r);
+        if material.tangent == TangentChoice::Elastic {
+            plane.tangent = material.elastic.tangent;
+            plane.s_zz_tangent = material.elastic.s_zz_tangent;
+        }
+        h.host_stress(&plane, out.stress).map_err(with_material)?;
+        h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)
+            .map_err(with_material)?;
+        let mirrors = [
+            p.id as f64,
+            r.report.iterations as f64,
+            r.report.substeps as f64,
+        ];
+        for (s, m) in out.statev.iter_mut().zip(mirrors) {
+            *s = m;
+        }
+        Ok(Outcome {
+            solved,
+            committed,
+            reverted,
+            iterations: r.report.iterations,
+        })
+    }
+
+    /// The RVE's answer at the call's strain: the point's trial when the strain repeats
+    /// it bit for bit, else a new trial (true: solved).
+    fn answer(&self, p: &mut Point, c: &UmatCall) -> crate::Result<(Response, bool)> {
+        let h = c.hypothesis;
+        h.check_model(&p.material.model)?;
+        let total: Vec<f64> = c.stran.iter().zip(c.dstran).map(|(a, b)| a + b).collect();
+        let strain = h.rve_strain(&total)?;
+        if let Some((s, r)) = p.last {
+            if s.map(f64::to_bits) == strain.map(f64::to_bits) {
+                self.repeats.fetch_add(1, Ordering::Relaxed);
+                return Ok((r, false));
+            }
+        }
+        let request = match p.material.tangent {
+            TangentChoice::Consistent => TangentRequest::Consistent,
+            TangentChoice::Elastic => TangentRequest::None,
+        };
+        self.solves.fetch_add(1, Ordering::Relaxed);
+        let model = p.material.model.clone();
+        let r = with_workspace(&model, |ws| p.instance.update(strain, ws, request));
+        p.last = r.as_ref().ok().map(|r| (strain, *r));
+        Ok((r?, true))
+    }
+
+    /// The point `(NOEL, NPT)`, created with its material on the first call.
+    fn point(&self, c: &UmatCall) -> Result<PointRef, (Arc<Error>, bool)> {
+        let key = (c.noel, c.npt);
+        if let Some(p) = self
+            .points
+            .read()
+            .unwrap_or_else(PoisonError::into_inner)
+            .get(&key)
+        {
+            return Ok(p.clone());
+        }
+        let material = self.material(c)?;
+        let point = Point {
+            id: self.next_id.fetch_add(1, Ordering::Relaxed),
+            key: MaterialKey::of(c),
+            instance: Instance::new(material.model.clone()),
+            material,
+            increment: None,
+            dtime: 0.0,
+            last: None,
+            failed: false,
+        };
+        let mut points = self.points.write().unwrap_or_else(PoisonError::into_inner);
+        Ok(points
+            .entry(key)
+            .or_insert_with(|| Arc::new(Mutex::new(point)))
+            .clone())
+    }
+
+    /// The material of a call, resolved once per name and `PROPS` (failures too, so a
+    /// bad material is reported once and not rebuilt at every point).
+    fn material(&self, c: &UmatCall) -> Result<Arc<Material>, (Arc<Error>, bool)> {
+        let key = MaterialKey::of(c);
+        let mut materials = self
+            .materials
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        if let Some(entry) = materials.get(&key) {
+            return entry.clone().map_err(|e| (e, false));
+        }
+        let entry = Material::resolve(&key.cmname, c.props, &self.search)
+            .map(Arc::new)
+            .map_err(Arc::new);
+        materials.insert(key, entry.clone());
+        entry.map_err(|e| (e, true))
+    }
+
+    fn fail(
+        &self,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        error: Arc<Error>,
+        first_report: bool,
+        material: Option<&Material>,
+    ) -> UmatFailure {
+        let pnewdt = match *error {
+            Error::Solve {
+                suggested_step_ratio,
+                ..
+            } => suggested_step_ratio,
+            _ => FAILURE_STEP_RATIO,
+        };
+        *out.pnewdt = pnewdt;
+        let n = c.hypothesis.ntens();
+        if out.ddsdde.len() == n * n {
+            match material {
+                Some(m) => {
+                    // Lengths checked: cannot fail.
+                    let _ = c
+                        .hypothesis
+                        .host_tangent(&m.elastic, &m.elastic.tangent, out.ddsdde);
+                }
+                None => out.ddsdde.fill(0.0),
+            }
+        }
+        UmatFailure {
+            noel: c.noel,
+            npt: c.npt,
+            cmname: trim(c.cmname).to_string(),
+            error,
+            pnewdt,
+            first_report,
+        }
+    }
+}
+
+fn check_lengths(c: &UmatCall, out: &UmatOutputs) -> crate::Result<()> {
+    let n = c.hypothesis.ntens();
+    let lengths = [
+        ("STRAN", c.stran.len(), n),
+        ("DSTRAN", c.dstran.len(), n),
+        ("STRESS", out.stress.len(), n),
+        ("DDSDDE", out.ddsdde.len(), n * n),
+    ];
+    for (name, got, want) in lengths {
+        if got != want {
+            return Err(Error::HostConvention(format!(
+                "{name} has {got} entries, NTENS = {n} needs {want}"
+            )));
+        }
+    }
+    Ok(())
+}
