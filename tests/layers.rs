@@ -140,3 +140,127 @@ fn the_checker_sees_use_lines_groups_and_inline_paths() {
     let found: Vec<String> = crate_paths(text).into_iter().map(|(m, _)| m).collect();
     assert_eq!(found, ["solver", "mesh", "scene", "model"]);
 }
+
+/// The source file a `crate::a::b` or `super::b` path of `file` names, if any: the longest
+/// prefix of the path that is a file of the tree (`a/b.rs`, or `a/mod.rs`).
+fn target_file(src: &Path, file: &Path, path: &[&str]) -> Option<std::path::PathBuf> {
+    let (mut base, rest) = match path.first() {
+        Some(&"crate") => (src.to_path_buf(), &path[1..]),
+        Some(&"super") => {
+            let dir = file.parent()?.to_path_buf();
+            // `super` of a `mod.rs` is the parent folder's module.
+            let dir = if file.file_name()? == "mod.rs" {
+                dir.parent()?.to_path_buf()
+            } else {
+                dir
+            };
+            (dir, &path[1..])
+        }
+        _ => return None,
+    };
+    let mut found = None;
+    for part in rest {
+        let as_file = base.join(format!("{part}.rs"));
+        let as_dir = base.join(part);
+        if as_file.is_file() {
+            found = Some(as_file);
+            break;
+        } else if as_dir.join("mod.rs").is_file() {
+            found = Some(as_dir.join("mod.rs"));
+            base = as_dir;
+        } else {
+            break;
+        }
+    }
+    found.filter(|f| f != file)
+}
+
+/// The files each `use crate::...`/`use super::...` line of `file` imports from.
+fn file_imports(src: &Path, file: &Path) -> Vec<std::path::PathBuf> {
+    let text = std::fs::read_to_string(file).unwrap();
+    let code = text.split("#[cfg(test)]").next().unwrap_or("");
+    let mut out = Vec::new();
+    for line in code.lines() {
+        let line = line.trim();
+        let Some(rest) = line
+            .strip_prefix("use ")
+            .or_else(|| line.strip_prefix("pub use "))
+        else {
+            continue;
+        };
+        let head: Vec<&str> = rest
+            .split(['{', ';'])
+            .next()
+            .unwrap_or("")
+            .split("::")
+            .filter(|p| !p.is_empty())
+            .collect();
+        if let Some(target) = target_file(src, file, &head) {
+            out.push(target);
+        }
+    }
+    out
+}
+
+/// No two source files import each other, directly or through others (the `mod.rs` files,
+/// which only declare and re-export, are left out: they are the folders' doors).
+#[test]
+fn no_import_loop_between_files() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    visit(&src, &mut files);
+    let is_door = |f: &Path| {
+        f.file_name()
+            .is_some_and(|n| n == "mod.rs" || n == "lib.rs")
+    };
+    let graph: BTreeMap<_, Vec<_>> = files
+        .iter()
+        .filter(|f| !is_door(f))
+        .map(|f| {
+            let targets = file_imports(&src, f)
+                .into_iter()
+                .filter(|t| !is_door(t))
+                .collect();
+            (f.clone(), targets)
+        })
+        .collect();
+    // Depth-first search with colours: a grey node met again closes a loop.
+    fn visit_node(
+        node: &std::path::PathBuf,
+        graph: &BTreeMap<std::path::PathBuf, Vec<std::path::PathBuf>>,
+        colour: &mut BTreeMap<std::path::PathBuf, u8>,
+        stack: &mut Vec<std::path::PathBuf>,
+        loops: &mut Vec<String>,
+    ) {
+        colour.insert(node.clone(), 1);
+        stack.push(node.clone());
+        for next in graph.get(node).into_iter().flatten() {
+            match colour.get(next).copied().unwrap_or(0) {
+                0 => visit_node(next, graph, colour, stack, loops),
+                1 => {
+                    let at = stack.iter().position(|n| n == next).unwrap();
+                    let names: Vec<String> = stack[at..]
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect();
+                    loops.push(names.join(" -> "));
+                }
+                _ => {}
+            }
+        }
+        stack.pop();
+        colour.insert(node.clone(), 2);
+    }
+    let (mut colour, mut loops) = (BTreeMap::new(), Vec::new());
+    for node in graph.keys() {
+        if colour.get(node).copied().unwrap_or(0) == 0 {
+            visit_node(node, &graph, &mut colour, &mut Vec::new(), &mut loops);
+        }
+    }
+    let edges: usize = graph.values().map(Vec::len).sum();
+    assert!(
+        edges > 50,
+        "only {edges} file imports found: the parser is broken"
+    );
+    assert!(loops.is_empty(), "file import loops:\n{}", loops.join("\n"));
+}
