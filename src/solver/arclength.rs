@@ -191,7 +191,7 @@ fn direction(points: u32, trace: &TraceBuffers) -> f64 {
 /// fresh factorization; false if `K` is singular.
 fn tangent_at(problem: &Problem, strain: &Strain, trial: &State, ws: &mut Workspace) -> bool {
     problem.evaluate(&trial.unknowns, strain, TangentKind::Consistent, ws);
-    if problem.factorize(ws, true).is_err() {
+    if problem.factorize(ws, false).is_err() {
         return false;
     }
     load_direction(problem, ws);
@@ -286,7 +286,7 @@ fn correct(
         if rnorm <= tolerance {
             return Some(t);
         }
-        problem.factorize(ws, true).ok()?;
+        problem.factorize(ws, false).ok()?;
         work.iterations += 1;
         // dx_R into ws.dx, dx_f into ws.trace.dxf (both with this factorization).
         ws.dx

@@ -194,13 +194,13 @@ fn correction(
     chord: bool,
     ws: &mut Workspace,
 ) -> Result<(), Failure> {
-    let fresh = !(chord && ws.factorization.is_consistent());
+    let fresh = !(chord && ws.factorization.is_reusable());
     if fresh {
         problem
             .factorize(ws, kind == TangentKind::Consistent)
             .map_err(Failure::Singular)?;
     }
-    if fresh && ws.factorization.is_consistent() {
+    if fresh && ws.factorization.is_reusable() {
         ws.factorization.solve_with_g(
             problem.linear,
             &problem.disc.g,

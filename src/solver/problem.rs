@@ -98,17 +98,18 @@ impl Problem<'_> {
         );
     }
 
-    /// Factorizes the current tangent (`consistent`: it is `dR/dx`, not a secant matrix).
+    /// Factorizes the current matrix; `reusable`: it is the consistent tangent `dR/dx` and
+    /// its factors may serve chord corrections and the condensed tangent.
     pub(super) fn factorize(
         &self,
         ws: &mut Workspace,
-        consistent: bool,
+        reusable: bool,
     ) -> Result<FactorKind, String> {
         ws.factorization.factorize(
             self.linear,
             &self.disc.pattern.symbolic,
             &ws.current.k,
-            consistent,
+            reusable,
         )
     }
 

@@ -48,7 +48,7 @@ pub(super) fn condensed(g: &[f64], x: &[f64], res: Option<&[f64]>) -> [f64; 9] {
 /// Computes `C = G^T K^-1 G` at the converged state (`ws.current.k`) and leaves the best
 /// `X ~ K^-1 G` in the factorization's `kg` (see the module docs).
 pub(super) fn condensed_tangent(problem: &Problem, ws: &mut Workspace) -> Result<[f64; 9]> {
-    if ws.factorization.is_consistent() {
+    if ws.factorization.is_reusable() {
         if let Some(c) = from_last_factorization(problem, ws) {
             return Ok(c);
         }

@@ -36,10 +36,10 @@ impl Evaluation {
 pub struct Factorization {
     numeric: NumericFactor,
     stack: MemBuffer,
-    /// The values factorized last.
+    /// The values of the last reusable factorization.
     matrix: Vec<f64>,
-    /// True when `numeric` holds a factorization of `matrix` and `matrix` is a consistent
-    /// tangent (chord corrections and the condensed tangent may use it).
+    /// True when `numeric` holds a factorization of `matrix`, a consistent tangent that
+    /// chord corrections and the condensed tangent may reuse.
     consistent: bool,
     /// `K_f^-1 G` (n x 3, column-major), or the refined `K^-1 G` of the tangent.
     kg: Vec<f64>,
@@ -59,14 +59,17 @@ impl Factorization {
         }
     }
 
-    /// Factorizes `values` (on `pattern`); `consistent` says whether they are a consistent
-    /// tangent. Whatever depended on the previous factors is invalidated.
+    /// Factorizes `values` (on `pattern`). `reusable`: they are a consistent tangent whose
+    /// factors chord corrections and the condensed tangent may reuse (the values are then
+    /// kept, to recognise an unchanged tangent); otherwise the factors serve one purpose
+    /// only (a secant matrix, a path direction). Whatever depended on the previous factors
+    /// is invalidated.
     pub fn factorize(
         &mut self,
         linear: &LinearSolver,
         pattern: &SymbolicSparseColMat<usize>,
         values: &[f64],
-        consistent: bool,
+        reusable: bool,
     ) -> Result<FactorKind, String> {
         self.kg_of_factor = false;
         self.consistent = false;
@@ -77,8 +80,10 @@ impl Factorization {
             true,
             MemStack::new(&mut self.stack),
         )?;
-        self.matrix.copy_from_slice(values);
-        self.consistent = consistent;
+        if reusable {
+            self.matrix.copy_from_slice(values);
+            self.consistent = true;
+        }
         Ok(kind)
     }
 
@@ -89,8 +94,8 @@ impl Factorization {
         self.kg_of_factor = false;
     }
 
-    /// Whether the factors are those of a consistent tangent.
-    pub(super) fn is_consistent(&self) -> bool {
+    /// Whether the factors are those of a reusable consistent tangent.
+    pub(super) fn is_reusable(&self) -> bool {
         self.consistent
     }
 
