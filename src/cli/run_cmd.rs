@@ -23,6 +23,10 @@ pub struct RunArgs {
     /// Do not print a line per increment.
     #[arg(long)]
     quiet: bool,
+    /// Also write a ParaView time series of the micro fields to this directory: one
+    /// `step_NNNN.vtu` per increment and the index `series.pvd` (time = step).
+    #[arg(long, value_name = "DIR")]
+    vtk: Option<PathBuf>,
 }
 
 /// Header of `response.csv`; the C driver writes the same columns.
@@ -58,6 +62,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
             1e3 * setup
         );
     }
+    if let Some(dir) = &args.vtk {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.clone(),
+            source,
+        })?;
+    }
+    let mut series = Vec::new();
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
     for (step, eps) in path_points(&scene.spec.path).into_iter().enumerate() {
@@ -76,6 +87,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
             r.report.limit_points
         )
         .map_err(io_err)?;
+        if let Some(dir) = &args.vtk {
+            let file = format!("step_{:04}.vtu", step + 1);
+            model.write_vtu(instance.committed(), &dir.join(&file))?;
+            series.push(((step + 1) as f64, file));
+        }
         if !args.quiet {
             eprintln!(
                 "step {:4}  eps = [{:+.3e} {:+.3e} {:+.3e}]  sig = [{:+.4} {:+.4} {:+.4}]  it {} sub {}",
@@ -85,8 +101,22 @@ pub fn run(args: &RunArgs) -> Result<()> {
         }
     }
     csv.flush().map_err(io_err)?;
+    if let Some(dir) = &args.vtk {
+        write_series_index(&dir.join("series.pvd"), &series)?;
+    }
     if !args.quiet {
         eprintln!("wrote {}", csv_path.display());
     }
     Ok(())
+}
+
+/// Writes the `.pvd` index of the VTK series.
+fn write_series_index(path: &std::path::Path, series: &[(f64, String)]) -> Result<()> {
+    let io_err = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut w = BufWriter::new(File::create(path).map_err(io_err)?);
+    rve::io::write_pvd(series, &mut w).map_err(io_err)?;
+    w.flush().map_err(io_err)
 }
