@@ -798,7 +798,11 @@ mod tests {
             } else {
                 1.0 - l.t_max(&h) / (l.initial_stiffness() * dm)
             };
-            assert!((m.damage - expected).abs() <= 1e-14, "{dm}: {} vs {expected}", m.damage);
+            assert!(
+                (m.damage - expected).abs() <= 1e-14,
+                "{dm}: {} vs {expected}",
+                m.damage
+            );
         }
     }
 }

@@ -99,7 +99,11 @@ impl RveFields {
         }
     }
 
-    fn interfaces(disc: &Discretization, state: &State, fluct: impl Fn(u32) -> f64) -> Vec<ItzFields> {
+    fn interfaces(
+        disc: &Discretization,
+        state: &State,
+        fluct: impl Fn(u32) -> f64,
+    ) -> Vec<ItzFields> {
         let Some(law) = disc.law.as_deref() else {
             return Vec::new();
         };

@@ -121,7 +121,6 @@ fn write_grid(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
     Ok(())
 }
 
-
 /// Writes `mesh` with the fields of one state as a `.vtu` document.
 ///
 /// Point data: `displacement` (3 components, z = 0, for ParaView's "Warp By Vector").
