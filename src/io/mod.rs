@@ -6,5 +6,5 @@ mod svg;
 mod vtk;
 
 pub use fields::{ItzFields, RveFields, BRANCH_CONTACT, BRANCH_LOADING, BRANCH_UNLOADING};
-pub use svg::write_svg;
+pub use svg::{amplification, write_deformed_svg, write_response_svg, write_svg, ResponsePoint};
 pub use vtk::{write_pvd, write_vtu, write_vtu_fields};
