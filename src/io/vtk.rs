@@ -127,8 +127,9 @@ fn write_grid(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
 /// Cell data, on every cell (NaN, or -1 for `branch`, where a value does not apply):
 /// `phase`, `element_kind`, `strain` and `stress` (`[xx, yy, xy]`, engineering shear
 /// strain) on triangles; `shear_opening`, `normal_opening`, `opening_ratio`
-/// (`delta/delta_c`), `max_opening_ratio` (`delta_max/delta_c`), `damage` and `branch`
-/// (0 loading, 1 unloading, 2 contact) on interface elements (see [`RveFields`]).
+/// (`delta/delta_c`), `max_opening_ratio` (`delta_max/delta_c`), `damage`, `branch`
+/// (0 loading, 1 unloading, 2 contact) and `closed_points` (points in contact) on
+/// interface elements (see [`RveFields`]).
 pub fn write_vtu_fields(mesh: &Mesh, fields: &RveFields, w: &mut impl Write) -> io::Result<()> {
     let n_tri = mesh.triangles.len();
     let n_itz = mesh.interfaces.len();
@@ -176,6 +177,11 @@ pub fn write_vtu_fields(mesh: &Mesh, fields: &RveFields, w: &mut impl Write) -> 
         .chain((0..n_itz).map(|e| fields.itz.get(e).map_or(-1.0, |f| f64::from(f.branch))))
         .collect();
     data_array(w, "Int8", "branch", 1, &branch)?;
+    let closed: Vec<f64> = std::iter::repeat(-1.0)
+        .take(n_tri)
+        .chain((0..n_itz).map(|e| fields.itz.get(e).map_or(-1.0, |f| f.closed_points as f64)))
+        .collect();
+    data_array(w, "Int8", "closed_points", 1, &closed)?;
     writeln!(w, "</CellData>")?;
     writeln!(w, r#"<PointData Vectors="displacement">"#)?;
     let disp: Vec<f64> = fields
