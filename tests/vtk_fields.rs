@@ -151,3 +151,30 @@ fn cli_vtk_series_leaves_the_csv_unchanged() {
     assert_eq!(pvd.matches("<DataSet ").count(), n);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Off a terminal `rve run` prints a line per increment and no progress bar; `--quiet`
+/// prints nothing.
+#[test]
+fn no_progress_bar_off_a_terminal_and_silence_with_quiet() {
+    let dir = std::env::temp_dir().join(format!("rve_progress_{}", std::process::id()));
+    let scene = common::repo("scenes/paper_rve.toml");
+    let run = |quiet: bool| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_rve"));
+        cmd.args(["run", scene.to_str().unwrap(), "--out"])
+            .arg(&dir);
+        if quiet {
+            cmd.arg("--quiet");
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success());
+        String::from_utf8(o.stderr).unwrap()
+    };
+    let loud = run(false);
+    assert_eq!(loud.lines().filter(|l| l.starts_with("step ")).count(), 20);
+    assert!(
+        !loud.contains("increments,"),
+        "a progress bar off a terminal"
+    );
+    assert_eq!(run(true), "");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,12 +1,13 @@
 //! `rve run [SCENE] --out DIR`: follow the scene's strain path, write `DIR/response.csv`.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
 use rve::error::{Error, Result};
 use rve::scene::path_points;
 use rve::{Instance, Model, TangentRequest};
@@ -20,7 +21,8 @@ pub struct RunArgs {
     /// Output directory (created if missing).
     #[arg(long, default_value = "out")]
     out: PathBuf,
-    /// Do not print a line per increment.
+    /// Print nothing but errors (no progress bar, no line per increment). Otherwise a
+    /// progress bar when stderr is a terminal, a line per increment when it is not.
     #[arg(long)]
     quiet: bool,
     /// Also write a ParaView time series of the micro fields to this directory: one
@@ -110,7 +112,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
         if let Some(bad) = list.iter().find(|&&k| k > points.len()) {
             return Err(Error::scene(
                 "path",
-                format!("--frames names increment {bad}, the path has {}", points.len()),
+                format!(
+                    "--frames names increment {bad}, the path has {}",
+                    points.len()
+                ),
             ));
         }
     }
@@ -121,6 +126,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
     let n_steps = points.len();
+    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
+        let style = ProgressStyle::with_template(
+            "{bar:32} {pos}/{len} increments, {elapsed} (eta {eta})  {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar());
+        ProgressBar::new(n_steps as u64).with_style(style)
+    });
     for (step, eps) in points.into_iter().enumerate() {
         let t0 = Instant::now();
         let r = instance.update(eps, &mut ws, TangentRequest::Consistent)?;
@@ -151,7 +163,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
             });
             // The stress along the direction of the first increment's stress.
             let first = response[0].stress;
-            let norm = first.iter().map(|v| v * v).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
+            let norm = first
+                .iter()
+                .map(|v| v * v)
+                .sum::<f64>()
+                .sqrt()
+                .max(f64::MIN_POSITIVE);
             let size = (0..3).map(|k| r.stress[k] * first[k]).sum::<f64>() / norm;
             let keep = match &args.frames {
                 Frames::All => {
@@ -171,13 +188,22 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 kept = Some((step + 1, instance.committed().clone(), size));
             }
         }
-        if !args.quiet {
+        if let Some(bar) = &bar {
+            bar.set_message(format!(
+                "sig = [{:+.4} {:+.4} {:+.4}]",
+                r.stress[0], r.stress[1], r.stress[2]
+            ));
+            bar.inc(1);
+        } else if !args.quiet {
             eprintln!(
                 "step {:4}  eps = [{:+.3e} {:+.3e} {:+.3e}]  sig = [{:+.4} {:+.4} {:+.4}]  it {} sub {}",
                 step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
                 r.report.iterations, r.report.substeps
             );
         }
+    }
+    if let Some(bar) = &bar {
+        bar.finish();
     }
     csv.flush().map_err(io_err)?;
     if let Some(dir) = &args.vtk {
@@ -203,7 +229,12 @@ fn write_series_index(path: &std::path::Path, series: &[(f64, String)]) -> Resul
 
 /// Writes `DIR/step_NNNN.svg`, the deformed RVE of the committed `state` of increment
 /// `step`.
-fn write_frame(model: &Model, dir: &std::path::Path, step: usize, state: &rve::State) -> Result<()> {
+fn write_frame(
+    model: &Model,
+    dir: &std::path::Path,
+    step: usize,
+    state: &rve::State,
+) -> Result<()> {
     let fields = model.fields(state);
     let e = state.strain;
     let caption = format!(

@@ -466,7 +466,7 @@ pub unsafe extern "C" fn rve_write_vtk(h: RveHandle, path: *const c_char) -> u32
         let instance = entry.lock()?;
         instance
             .model()
-            .write_vtu(instance.committed(), &path)
+            .write_vtu(instance.committed(), path)
             .map_err(|e| Failure::new(RveStatus::WriteFailed, e.to_string()))
     }) as u32
 }

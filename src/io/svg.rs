@@ -84,7 +84,11 @@ pub fn amplification(mesh: &Mesh, fields: &RveFields) -> f64 {
 /// Colour of `delta_max/delta_c` on a white-yellow-red-black scale: 0 white, 1 (the
 /// peak of the envelope) orange, 5 and more dark red.
 fn opening_colour(ratio: f64) -> String {
-    let r = if ratio.is_finite() { ratio.max(0.0) } else { 0.0 };
+    let r = if ratio.is_finite() {
+        ratio.max(0.0)
+    } else {
+        0.0
+    };
     let t = (r / 5.0).min(1.0).sqrt();
     let (red, green, blue) = (
         255.0 * (1.0 - 0.55 * (t - 0.6).max(0.0) / 0.4),
@@ -318,7 +322,11 @@ pub fn write_response_svg(points: &[ResponsePoint], w: &mut impl Write) -> io::R
             line.join(" ")
         )?;
         for p in points {
-            let fill = if p.loading_points > 0 { colour } else { "white" };
+            let fill = if p.loading_points > 0 {
+                colour
+            } else {
+                "white"
+            };
             writeln!(
                 w,
                 r#"<circle cx="{:.2}" cy="{:.2}" r="2.5" fill="{fill}" stroke="{colour}"/>"#,

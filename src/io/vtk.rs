@@ -144,7 +144,7 @@ pub fn write_vtu_fields(mesh: &Mesh, fields: &RveFields, w: &mut impl Write) -> 
         .triangles
         .iter()
         .map(|t| f64::from(t.phase.id()))
-        .chain(std::iter::repeat(2.0).take(n_itz))
+        .chain(std::iter::repeat_n(2.0, n_itz))
         .collect();
     data_array(w, "UInt8", "phase", 1, &phase)?;
     let kind: Vec<f64> = (0..n_tri + n_itz)
@@ -156,11 +156,11 @@ pub fn write_vtu_fields(mesh: &Mesh, fields: &RveFields, w: &mut impl Write) -> 
             .iter()
             .flatten()
             .copied()
-            .chain(std::iter::repeat(f64::NAN).take(3 * n_itz))
+            .chain(std::iter::repeat_n(f64::NAN, 3 * n_itz))
             .collect();
         data_array(w, "Float64", name, 3, &flat)?;
     }
-    let nan_tri = || std::iter::repeat(f64::NAN).take(n_tri);
+    let nan_tri = || std::iter::repeat_n(f64::NAN, n_tri);
     let scalars: [(&str, Vec<f64>); 5] = [
         ("shear_opening", itz(&|e| e.shear_opening)),
         ("normal_opening", itz(&|e| e.normal_opening)),
@@ -172,13 +172,11 @@ pub fn write_vtu_fields(mesh: &Mesh, fields: &RveFields, w: &mut impl Write) -> 
         let all: Vec<f64> = nan_tri().chain(values).collect();
         data_array(w, "Float64", name, 1, &all)?;
     }
-    let branch: Vec<f64> = std::iter::repeat(-1.0)
-        .take(n_tri)
+    let branch: Vec<f64> = std::iter::repeat_n(-1.0, n_tri)
         .chain((0..n_itz).map(|e| fields.itz.get(e).map_or(-1.0, |f| f64::from(f.branch))))
         .collect();
     data_array(w, "Int8", "branch", 1, &branch)?;
-    let closed: Vec<f64> = std::iter::repeat(-1.0)
-        .take(n_tri)
+    let closed: Vec<f64> = std::iter::repeat_n(-1.0, n_tri)
         .chain((0..n_itz).map(|e| fields.itz.get(e).map_or(-1.0, |f| f.closed_points as f64)))
         .collect();
     data_array(w, "Int8", "closed_points", 1, &closed)?;
