@@ -1,6 +1,7 @@
 /*
  * error_paths.c -- provokes every status code of the C interface and checks that
- * outputs are left untouched on failure and that a readable message is available.
+ * outputs are left untouched on failure and that a readable message is available
+ * (WRITE_FAILED: rve_write_vtk to an unwritable path).
  * RVE_STATUS_INTERNAL and RVE_STATUS_PANIC mark bugs and cannot be provoked from C; the
  * panic boundary is exercised by the Rust tests.
  *
@@ -11,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "rve.h"
 
@@ -312,6 +314,50 @@ int main(int argc, char **argv) {
             }
         }
         EXPECT(rve_free(he), RVE_STATUS_OK);
+    }
+
+    /* rve_write_vtk: the committed state to a .vtu file; NULL path, zero, foreign and
+     * freed handles, unwritable paths; the instance is unchanged (same state bytes, and
+     * a pending trial can still be committed). */
+    {
+        char vtu[128], line[256];
+        size_t s0 = 0, s1 = 0, w0 = 0, w1 = 0;
+        uint8_t *b0, *b1;
+        double eps2[3] = {1e-4, 0.0, 0.0};
+        int found = 0;
+        FILE *f;
+        snprintf(vtu, sizeof vtu, "/tmp/rve_error_paths_%ld.vtu", (long)getpid());
+        EXPECT(rve_state_size(h, &s0), RVE_STATUS_OK);
+        b0 = malloc(s0);
+        EXPECT(rve_state_save(h, b0, s0, &w0), RVE_STATUS_OK);
+        EXPECT(rve_update(h, eps2, sig, d, RVE_TANGENT_REQUEST_NONE), RVE_STATUS_OK);
+        EXPECT(rve_write_vtk(h, vtu), RVE_STATUS_OK);
+        EXPECT(rve_write_vtk(h, NULL), RVE_STATUS_NULL_ARGUMENT);
+        EXPECT(rve_write_vtk(0, vtu), RVE_STATUS_BAD_HANDLE);
+        EXPECT(rve_write_vtk(12345, vtu), RVE_STATUS_BAD_HANDLE);
+        EXPECT(rve_write_vtk(freed, vtu), RVE_STATUS_BAD_HANDLE);
+        EXPECT(rve_write_vtk(h, "/nonexistent/dir/state.vtu"), RVE_STATUS_WRITE_FAILED);
+        EXPECT(rve_write_vtk(h, ""), RVE_STATUS_WRITE_FAILED);
+        EXPECT(rve_write_vtk(h, "/tmp"), RVE_STATUS_WRITE_FAILED); /* a directory */
+        EXPECT(rve_state_size(h, &s1), RVE_STATUS_OK);
+        b1 = malloc(s1);
+        EXPECT(rve_state_save(h, b1, s1, &w1), RVE_STATUS_OK);
+        if (w0 != w1 || memcmp(b0, b1, w0) != 0) {
+            fprintf(stderr, "rve_write_vtk changed the committed state\n");
+            failures++;
+        }
+        EXPECT(rve_commit(h), RVE_STATUS_OK); /* the trial survived the writes */
+        f = fopen(vtu, "r");
+        while (f && fgets(line, sizeof line, f))
+            found += strstr(line, "Name=\"max_opening_ratio\"") != NULL;
+        if (!f || found != 1) {
+            fprintf(stderr, "%s: no max_opening_ratio array\n", vtu);
+            failures++;
+        }
+        if (f) fclose(f);
+        remove(vtu);
+        free(b0);
+        free(b1);
     }
 
     /* Unknown status codes have a message too. */

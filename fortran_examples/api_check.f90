@@ -46,6 +46,7 @@ program api_check
   call state_bytes()
   call batch()
   call last_error_raw()
+  call write_vtk()
 
   call expect_status(rve_free(h), RVE_STATUS_OK, 'rve_free')
   call expect_status(rve_free(h2), RVE_STATUS_OK, 'rve_free')
@@ -239,6 +240,25 @@ contains
     call expect_status(rve_revert(h), RVE_STATUS_OK, 'rve_revert')
     call expect_status(rve_revert(h2), RVE_STATUS_OK, 'rve_revert')
   end subroutine batch
+
+  ! rve_write_vtk: the committed state to a file; unwritable path and freed handle.
+  subroutine write_vtk()
+    character(len=*), parameter :: file = 'api_check_state.vtu'
+    logical :: exists
+    integer :: unit, ios
+    call expect_status(rve_write_vtk(h, file // c_null_char), RVE_STATUS_OK, 'rve_write_vtk')
+    inquire(file=file, exist=exists)
+    call expect(exists, 'rve_write_vtk wrote the file')
+    if (exists) then
+      open(newunit=unit, file=file, status='old', iostat=ios)
+      if (ios == 0) close(unit, status='delete')
+    end if
+    call expect_status(rve_write_vtk(h, '/nonexistent/dir/state.vtu' // c_null_char), &
+        RVE_STATUS_WRITE_FAILED, 'rve_write_vtk to a missing directory')
+    call expect(len(rve_last_error_f()) > 0, 'rve_write_vtk failure has a message')
+    call expect_status(rve_write_vtk(0_c_int64_t, file // c_null_char), &
+        RVE_STATUS_BAD_HANDLE, 'rve_write_vtk(0)')
+  end subroutine write_vtk
 
   ! The raw rve_last_error: length query, truncation with a NUL.
   subroutine last_error_raw()

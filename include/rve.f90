@@ -80,6 +80,7 @@ module rve
     enumerator :: RVE_STATUS_STATE_VERSION = 13    ! unsupported state format version
     enumerator :: RVE_STATUS_STATE_MISMATCH = 14   ! state of another scene's model
     enumerator :: RVE_STATUS_BATCH_FAILED = 15     ! see the batch's statuses array
+    enumerator :: RVE_STATUS_WRITE_FAILED = 16     ! output file not written (rve_write_vtk)
     enumerator :: RVE_STATUS_INTERNAL = 98         ! a bug: please report it
     enumerator :: RVE_STATUS_PANIC = 99            ! a bug: please report it
   end enum
@@ -103,7 +104,7 @@ module rve
       RVE_STATUS_ABSURD_STRAIN, RVE_STATUS_SOLVER_FAILED, RVE_STATUS_NO_TRIAL, &
       RVE_STATUS_INSTANCE_BUSY, RVE_STATUS_INVALID_ARGUMENT, RVE_STATUS_BUFFER_TOO_SMALL, &
       RVE_STATUS_BAD_STATE, RVE_STATUS_STATE_VERSION, RVE_STATUS_STATE_MISMATCH, &
-      RVE_STATUS_BATCH_FAILED, RVE_STATUS_INTERNAL, RVE_STATUS_PANIC
+      RVE_STATUS_BATCH_FAILED, RVE_STATUS_WRITE_FAILED, RVE_STATUS_INTERNAL, RVE_STATUS_PANIC
   public :: RVE_TANGENT_REQUEST_CONSISTENT, RVE_TANGENT_REQUEST_NONE, &
       RVE_TANGENT_REQUEST_ELASTIC
   public :: RVE_RELIABILITY_FAILED, RVE_RELIABILITY_RELIABLE, RVE_RELIABILITY_SUBSTEPPED
@@ -121,7 +122,7 @@ module rve
   ! ---- bind(C) interfaces: one per function of include/rve.h, in the header's order ----
   public :: rve_update_batch, rve_last_error, rve_init, rve_init_file, rve_init_text, &
       rve_clone_model, rve_update_ex, rve_update, rve_commit, rve_revert, rve_reset, &
-      rve_free, rve_state_size, rve_state_save, rve_state_load, rve_path_len, &
+      rve_free, rve_state_size, rve_state_save, rve_state_load, rve_write_vtk, rve_path_len, &
       rve_path_point, rve_model_builds, rve_status_message, rve_umat, rve_version, &
       rve_version_number, rve_abi_version
 
@@ -271,6 +272,16 @@ module rve
       integer(c_size_t), value, intent(in) :: len
       integer(c_int32_t) :: status
     end function rve_state_load
+
+    ! Writes the committed state as a ParaView .vtu file; path NUL-terminated
+    ! (path // c_null_char). The instance is unchanged. RVE_STATUS_WRITE_FAILED when the
+    ! file cannot be written.
+    function rve_write_vtk(h, path) bind(c, name="rve_write_vtk") result(status)
+      import :: c_int64_t, c_char, c_int32_t
+      integer(c_int64_t), value, intent(in) :: h
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int32_t) :: status
+    end function rve_write_vtk
 
     ! Number of increments of the scene's [[path]].
     function rve_path_len(h, n) bind(c, name="rve_path_len") result(status)

@@ -62,6 +62,9 @@ typedef enum RveStatus {
   RVE_STATUS_STATE_MISMATCH = 14,
   // At least one item of `rve_update_batch` failed; see its `statuses` array.
   RVE_STATUS_BATCH_FAILED = 15,
+  // An output file could not be written (`rve_write_vtk`: missing directory, no
+  // permission, disk full); `rve_last_error` names the path and the system's reason.
+  RVE_STATUS_WRITE_FAILED = 16,
   // An internal invariant was violated (a bug: please report it).
   RVE_STATUS_INTERNAL = 98,
   // A Rust panic was caught at the C boundary (a bug: please report it).
@@ -311,6 +314,21 @@ uint32_t rve_state_save(RveHandle h, uint8_t *buf, size_t len, size_t *written);
 // Each non-NULL pointer must point to valid memory of the documented size (strings:
 // NUL-terminated) for the duration of the call.
 uint32_t rve_state_load(RveHandle h, const uint8_t *buf, size_t len);
+
+// Writes the committed state of the instance (not the trial) as a VTK unstructured grid
+// (`.vtu`, ParaView) to the file `path` (NUL-terminated UTF-8; created or truncated):
+// the displacement, the strain and stress of each triangle, and the openings,
+// `delta/delta_c`, `delta_max/delta_c`, damage and branch of each ITZ element (the
+// arrays of `rve run --vtk`, see the README). Reads the instance only: its committed
+// state and trial are unchanged. Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`,
+// `WRITE_FAILED` (the file could not be created or written, e.g. an empty path or a
+// missing directory; `rve_last_error` names the path and the reason), `INSTANCE_BUSY`
+// or `PANIC`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_write_vtk(RveHandle h, const char *path);
 
 // Writes to `*n` the number of increments of the scene's strain path (`[[path]]`
 // segments; 0 when the scene has none). Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE` or

@@ -1,12 +1,13 @@
 //! `rve run [SCENE] --out DIR`: follow the scene's strain path, write `DIR/response.csv`.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
 use rve::error::{Error, Result};
 use rve::scene::path_points;
 use rve::{Instance, Model, TangentRequest};
@@ -20,9 +21,51 @@ pub struct RunArgs {
     /// Output directory (created if missing).
     #[arg(long, default_value = "out")]
     out: PathBuf,
-    /// Do not print a line per increment.
+    /// Print nothing but errors (no progress bar, no line per increment). Otherwise a
+    /// progress bar when stderr is a terminal, a line per increment when it is not.
     #[arg(long)]
     quiet: bool,
+    /// Also write a ParaView time series of the micro fields to this directory: one
+    /// `step_NNNN.vtu` per increment and the index `series.pvd` (time = step).
+    #[arg(long, value_name = "DIR")]
+    vtk: Option<PathBuf>,
+    /// Also write SVG pictures to this directory: the deformed RVE at the increments of
+    /// `--frames` (`step_NNNN.svg`) and the stresses against the increment
+    /// (`response.svg`).
+    #[arg(long, value_name = "DIR")]
+    svg: Option<PathBuf>,
+    /// Increments pictured by `--svg`: `last`, `all`, `peak` (the peak of the first
+    /// loading: the largest stress along the direction of the first increment's stress),
+    /// or a list of increment numbers `N,M,...` (from 1).
+    #[arg(long, default_value = "last", value_parser = parse_frames)]
+    frames: Frames,
+}
+
+/// Which increments `--svg` pictures.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Frames {
+    Last,
+    All,
+    Peak,
+    List(Vec<usize>),
+}
+
+fn parse_frames(s: &str) -> std::result::Result<Frames, String> {
+    match s {
+        "last" => Ok(Frames::Last),
+        "all" => Ok(Frames::All),
+        "peak" => Ok(Frames::Peak),
+        _ => s
+            .split(',')
+            .map(|n| match n.trim().parse::<usize>() {
+                Ok(k) if k >= 1 => Ok(k),
+                _ => Err(format!(
+                    "`{n}` is not an increment number (1, 2, ...); use last, all, peak or N,M,..."
+                )),
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .map(Frames::List),
+    }
 }
 
 /// Header of `response.csv`; the C driver writes the same columns.
@@ -58,9 +101,39 @@ pub fn run(args: &RunArgs) -> Result<()> {
             1e3 * setup
         );
     }
+    for dir in args.vtk.iter().chain(&args.svg) {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.clone(),
+            source,
+        })?;
+    }
+    let points = path_points(&scene.spec.path);
+    if let (Some(_), Frames::List(list)) = (&args.svg, &args.frames) {
+        if let Some(bad) = list.iter().find(|&&k| k > points.len()) {
+            return Err(Error::scene(
+                "path",
+                format!(
+                    "--frames names increment {bad}, the path has {}",
+                    points.len()
+                ),
+            ));
+        }
+    }
+    let mut response = Vec::new();
+    // (increment, committed state) kept for --frames last/peak.
+    let mut kept: Option<(usize, rve::State, f64)> = None;
+    let mut series = Vec::new();
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
-    for (step, eps) in path_points(&scene.spec.path).into_iter().enumerate() {
+    let n_steps = points.len();
+    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
+        let style = ProgressStyle::with_template(
+            "{bar:32} {pos}/{len} increments, {elapsed} (eta {eta})  {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar());
+        ProgressBar::new(n_steps as u64).with_style(style)
+    });
+    for (step, eps) in points.into_iter().enumerate() {
         let t0 = Instant::now();
         let r = instance.update(eps, &mut ws, TangentRequest::Consistent)?;
         let seconds = t0.elapsed().as_secs_f64();
@@ -76,7 +149,52 @@ pub fn run(args: &RunArgs) -> Result<()> {
             r.report.limit_points
         )
         .map_err(io_err)?;
-        if !args.quiet {
+        if let Some(dir) = &args.vtk {
+            let file = format!("step_{:04}.vtu", step + 1);
+            model.write_vtu(instance.committed(), &dir.join(&file))?;
+            series.push(((step + 1) as f64, file));
+        }
+        if let Some(dir) = &args.svg {
+            response.push(rve::io::ResponsePoint {
+                t: (step + 1) as f64,
+                stress: r.stress,
+                loading_points: r.report.loading,
+                contact_points: r.report.contact,
+            });
+            // The stress along the direction of the first increment's stress.
+            let first = response[0].stress;
+            let norm = first
+                .iter()
+                .map(|v| v * v)
+                .sum::<f64>()
+                .sqrt()
+                .max(f64::MIN_POSITIVE);
+            let size = (0..3).map(|k| r.stress[k] * first[k]).sum::<f64>() / norm;
+            let keep = match &args.frames {
+                Frames::All => {
+                    write_frame(&model, dir, step + 1, instance.committed())?;
+                    false
+                }
+                Frames::List(list) => {
+                    if list.contains(&(step + 1)) {
+                        write_frame(&model, dir, step + 1, instance.committed())?;
+                    }
+                    false
+                }
+                Frames::Last => step + 1 == n_steps,
+                Frames::Peak => kept.as_ref().is_none_or(|k| size > k.2),
+            };
+            if keep {
+                kept = Some((step + 1, instance.committed().clone(), size));
+            }
+        }
+        if let Some(bar) = &bar {
+            bar.set_message(format!(
+                "sig = [{:+.4} {:+.4} {:+.4}]",
+                r.stress[0], r.stress[1], r.stress[2]
+            ));
+            bar.inc(1);
+        } else if !args.quiet {
             eprintln!(
                 "step {:4}  eps = [{:+.3e} {:+.3e} {:+.3e}]  sig = [{:+.4} {:+.4} {:+.4}]  it {} sub {}",
                 step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
@@ -84,9 +202,60 @@ pub fn run(args: &RunArgs) -> Result<()> {
             );
         }
     }
+    if let Some(bar) = &bar {
+        bar.finish();
+    }
     csv.flush().map_err(io_err)?;
+    if let Some(dir) = &args.vtk {
+        write_series_index(&dir.join("series.pvd"), &series)?;
+    }
+    if let Some(dir) = &args.svg {
+        if let Some((step, state, _)) = &kept {
+            write_frame(&model, dir, *step, state)?;
+        }
+        let path = dir.join("response.svg");
+        write_with(&path, |w| rve::io::write_response_svg(&response, w))?;
+    }
     if !args.quiet {
         eprintln!("wrote {}", csv_path.display());
     }
     Ok(())
+}
+
+/// Writes the `.pvd` index of the VTK series.
+fn write_series_index(path: &std::path::Path, series: &[(f64, String)]) -> Result<()> {
+    write_with(path, |w| rve::io::write_pvd(series, w))
+}
+
+/// Writes `DIR/step_NNNN.svg`, the deformed RVE of the committed `state` of increment
+/// `step`.
+fn write_frame(
+    model: &Model,
+    dir: &std::path::Path,
+    step: usize,
+    state: &rve::State,
+) -> Result<()> {
+    let fields = model.fields(state);
+    let e = state.strain;
+    let caption = format!(
+        "increment {step}, strain [{:.3e} {:.3e} {:.3e}]",
+        e[0], e[1], e[2]
+    );
+    write_with(&dir.join(format!("step_{step:04}.svg")), |w| {
+        rve::io::write_deformed_svg(model.mesh(), &fields, 900.0, &caption, w)
+    })
+}
+
+/// Creates `path` and writes it with `f`, mapping failures to [`Error::Io`].
+fn write_with(
+    path: &std::path::Path,
+    f: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<()> {
+    let io_err = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut w = BufWriter::new(File::create(path).map_err(io_err)?);
+    f(&mut w).map_err(io_err)?;
+    w.flush().map_err(io_err)
 }

@@ -445,6 +445,32 @@ pub unsafe extern "C" fn rve_state_load(h: RveHandle, buf: *const u8, len: usize
     }) as u32
 }
 
+/// Writes the committed state of the instance (not the trial) as a VTK unstructured grid
+/// (`.vtu`, ParaView) to the file `path` (NUL-terminated UTF-8; created or truncated):
+/// the displacement, the strain and stress of each triangle, and the openings,
+/// `delta/delta_c`, `delta_max/delta_c`, damage and branch of each ITZ element (the
+/// arrays of `rve run --vtk`, see the README). Reads the instance only: its committed
+/// state and trial are unchanged. Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`,
+/// `WRITE_FAILED` (the file could not be created or written, e.g. an empty path or a
+/// missing directory; `rve_last_error` names the path and the reason), `INSTANCE_BUSY`
+/// or `PANIC`.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+pub unsafe extern "C" fn rve_write_vtk(h: RveHandle, path: *const c_char) -> u32 {
+    guard("rve_write_vtk", || {
+        let path = c_path(c_str(path, "path")?)?;
+        let entry = registry::get(h)?;
+        let instance = entry.lock()?;
+        instance
+            .model()
+            .write_vtu(instance.committed(), path)
+            .map_err(|e| Failure::new(RveStatus::WriteFailed, e.to_string()))
+    }) as u32
+}
+
 /// Writes to `*n` the number of increments of the scene's strain path (`[[path]]`
 /// segments; 0 when the scene has none). Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE` or
 /// `PANIC`.

@@ -46,6 +46,9 @@ pub enum RveStatus {
     StateMismatch = 14,
     /// At least one item of `rve_update_batch` failed; see its `statuses` array.
     BatchFailed = 15,
+    /// An output file could not be written (`rve_write_vtk`: missing directory, no
+    /// permission, disk full); `rve_last_error` names the path and the system's reason.
+    WriteFailed = 16,
     /// An internal invariant was violated (a bug: please report it).
     Internal = 98,
     /// A Rust panic was caught at the C boundary (a bug: please report it).
@@ -53,7 +56,7 @@ pub enum RveStatus {
 }
 
 /// Every status, for tests and documentation.
-pub const ALL_STATUSES: [RveStatus; 18] = [
+pub const ALL_STATUSES: [RveStatus; 19] = [
     RveStatus::Ok,
     RveStatus::NullArgument,
     RveStatus::BadScene,
@@ -70,6 +73,7 @@ pub const ALL_STATUSES: [RveStatus; 18] = [
     RveStatus::StateVersion,
     RveStatus::StateMismatch,
     RveStatus::BatchFailed,
+    RveStatus::WriteFailed,
     RveStatus::Internal,
     RveStatus::Panic,
 ];
@@ -102,6 +106,7 @@ impl RveStatus {
             RveStatus::StateVersion => "the state was saved in an unsupported format version\0",
             RveStatus::StateMismatch => "the state belongs to a model of another scene\0",
             RveStatus::BatchFailed => "at least one item of the batch failed\0",
+            RveStatus::WriteFailed => "an output file could not be written\0",
             RveStatus::Internal => "internal error (a bug: please report it)\0",
             RveStatus::Panic => "internal error (panic caught at the C boundary)\0",
         }
@@ -174,7 +179,7 @@ mod tests {
             assert!(status.message().ends_with('\0'));
             assert!(!status.text().contains('\0'));
         }
-        assert_eq!(RveStatus::from_u32(16), None);
+        assert_eq!(RveStatus::from_u32(17), None);
         assert_eq!(RveStatus::try_from(97), Err(97));
         let unknown = unsafe { std::ffi::CStr::from_ptr(rve_status_message(12345)) };
         assert_eq!(unknown.to_str().unwrap(), "unknown status code");

@@ -104,7 +104,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use super::law::{Branch, InterfaceLaw, LawPoint, TangentKind};
+use super::law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
 
 /// Contact penalty on a closed interface point (eqs. 36-37).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -364,6 +364,26 @@ impl InterfaceLaw for CohesiveLaw {
     /// `delta_max` is a non-negative opening.
     fn history_is_valid(&self, history: &[f64]) -> bool {
         history.iter().all(|d| d.is_finite() && *d >= 0.0)
+    }
+
+    /// `delta/delta_c` with the opening the law uses at `jump` (eq. 20; `beta |delta_s|`
+    /// at a closed point with [`ContactShear::Cohesive`]), `delta_max/delta_c`, and the
+    /// damage as the loss of secant stiffness of unloading (eq. 24) against the virgin one:
+    /// ```text
+    /// D = 1 - t_max / (e sigma_c delta_max/delta_c) = 1 - exp(-delta_max/delta_c)
+    /// ```
+    /// (0 virgin, `1 - 1/e` at the peak of the envelope, tends to 1 as the crack opens).
+    fn measures(&self, history: &[f64], jump: [f64; 2], length: f64) -> Option<PointMeasures> {
+        let h = CohesiveHistory {
+            delta_max: history[0],
+        };
+        let point = self.evaluate(&h, jump, length);
+        let max_ratio = h.delta_max / self.delta_c;
+        Some(PointMeasures {
+            opening_ratio: point.opening / self.delta_c,
+            max_opening_ratio: max_ratio,
+            damage: -(-max_ratio).exp_m1(),
+        })
     }
 
     /// With the paper's contact law, closed points that slide can leave the RVE without
@@ -763,5 +783,26 @@ mod tests {
             1e-6 * DC,
             Branch::Loading,
         );
+    }
+
+    #[test]
+    fn damage_is_the_secant_stiffness_loss() {
+        let l = law(true);
+        for dm in [0.0, 0.3 * DC, DC, 4.0 * DC] {
+            let h = loaded_to(dm);
+            let m = l.measures(&[dm], [0.0, 0.5 * dm], LEN).unwrap();
+            assert_eq!(m.max_opening_ratio, dm / DC);
+            assert!((m.opening_ratio - 0.5 * dm / DC).abs() <= 1e-15 * (1.0 + dm / DC));
+            let expected = if dm == 0.0 {
+                0.0
+            } else {
+                1.0 - l.t_max(&h) / (l.initial_stiffness() * dm)
+            };
+            assert!(
+                (m.damage - expected).abs() <= 1e-14,
+                "{dm}: {} vs {expected}",
+                m.damage
+            );
+        }
     }
 }

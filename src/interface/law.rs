@@ -42,6 +42,17 @@ pub struct LawPoint {
     pub branch: Branch,
 }
 
+/// Post-processing measures of one point of a law with a characteristic opening.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointMeasures {
+    /// Effective opening over the characteristic opening, `delta/delta_c` (eq. 20).
+    pub opening_ratio: f64,
+    /// Largest effective opening reached over the characteristic one, `delta_max/delta_c`.
+    pub max_opening_ratio: f64,
+    /// Secant stiffness loss in `[0, 1)`: `1 - k_unloading / k_virgin`.
+    pub damage: f64,
+}
+
 /// A traction-separation law of a zero-thickness interface.
 pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
     /// Internal variables per quadrature point.
@@ -70,6 +81,13 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
     /// Whether a history read from a checkpoint is admissible for this law.
     fn history_is_valid(&self, history: &[f64]) -> bool {
         history.iter().all(|v| v.is_finite())
+    }
+
+    /// Opening ratios and damage of a point with history `history` at the local jump
+    /// `jump` (for pictures and VTK output); `None` for a law without a characteristic
+    /// opening.
+    fn measures(&self, _history: &[f64], _jump: [f64; 2], _length: f64) -> Option<PointMeasures> {
+        None
     }
 
     /// Something to add to the message of a failed solve whose last iterate has

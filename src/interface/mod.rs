@@ -6,5 +6,5 @@ mod law;
 mod linear;
 
 pub use cohesive::{CohesiveHistory, CohesiveLaw, CohesivePoint, ContactShear, Penalty};
-pub use law::{Branch, InterfaceLaw, LawPoint, TangentKind};
+pub use law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
 pub use linear::LinearInterface;

@@ -7,6 +7,7 @@ pub mod cache;
 mod from_scene;
 mod instance;
 mod microstructure;
+mod post;
 mod rve_model;
 pub(crate) mod workspaces;
 
