@@ -100,7 +100,11 @@ pub struct Tally {
 
 impl Tally {
     pub fn count(&mut self, label: impl Into<String>) {
-        *self.counts.entry(label.into()).or_default() += 1;
+        self.add(label, 1);
+    }
+
+    pub fn add(&mut self, label: impl Into<String>, n: usize) {
+        *self.counts.entry(label.into()).or_default() += n;
     }
 }
 

@@ -3,6 +3,7 @@
 //! See `driver.rs` for the bounds and the environment variables, and
 //! `docs/reliability.md` for the figures.
 
+mod call_sequences;
 mod driver;
 mod gmsh_files;
 mod scene_text;

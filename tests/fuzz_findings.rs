@@ -154,3 +154,50 @@ fn an_msh_file_over_the_size_limit_is_refused_unread() {
         "{msg}"
     );
 }
+
+/// Fuzz case call_sequences seed 40: an update refused for a bad argument (an unknown
+/// tangent request, a NULL output) left the previous successful trial in place, so a
+/// following commit accepted it, against the header's "after any failure there is no
+/// trial to commit".
+#[test]
+fn an_update_refused_for_its_arguments_discards_the_trial() {
+    use rve::ffi::*;
+    use std::ffi::CString;
+    let ok = RveStatus::Ok as u32;
+    let path = CString::new(common::repo("scenes/paper_rve.toml").to_str().unwrap()).unwrap();
+    let mut h = 0;
+    assert_eq!(unsafe { rve_init_file(path.as_ptr(), &mut h) }, ok);
+    let e = [2e-5, 0.0, 0.0];
+    let (mut stress, mut tangent) = ([0.0; 3], [0.0; 9]);
+    let consistent = RveTangentRequest::Consistent as i32;
+    let mut good = || unsafe {
+        rve_update(
+            h,
+            e.as_ptr(),
+            stress.as_mut_ptr(),
+            tangent.as_mut_ptr(),
+            consistent,
+        )
+    };
+    assert_eq!(good(), ok);
+    let mut stress2 = [0.0; 3];
+    let bad_request =
+        unsafe { rve_update(h, e.as_ptr(), stress2.as_mut_ptr(), std::ptr::null_mut(), 7) };
+    assert_eq!(bad_request, RveStatus::InvalidArgument as u32);
+    assert_eq!(rve_commit(h), RveStatus::NoTrial as u32);
+    assert_eq!(good(), ok);
+    let null_stress = unsafe {
+        rve_update(
+            h,
+            e.as_ptr(),
+            std::ptr::null_mut(),
+            [0.0f64; 9].as_mut_ptr(),
+            consistent,
+        )
+    };
+    assert_eq!(null_stress, RveStatus::NullArgument as u32);
+    assert_eq!(rve_commit(h), RveStatus::NoTrial as u32);
+    assert_eq!(good(), ok);
+    assert_eq!(rve_commit(h), ok);
+    assert_eq!(rve_free(h), ok);
+}
