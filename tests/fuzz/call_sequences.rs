@@ -29,12 +29,12 @@ use crate::driver::{self, Tally};
 
 /// The C-call families share the process-wide registry; they run one at a time so that
 /// the leak check can count its instances.
-static FFI: Mutex<()> = Mutex::new(());
+pub static FFI: Mutex<()> = Mutex::new(());
 
 const OK: u32 = RveStatus::Ok as u32;
 const SCENES: [&str; 2] = ["scenes/paper_rve_host.toml", "scenes/single_interface.toml"];
 
-fn init(scene: usize) -> RveHandle {
+pub fn init(scene: usize) -> RveHandle {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENES[scene]);
     let path = CString::new(path.to_str().unwrap()).unwrap();
     let mut h = 0;
@@ -42,7 +42,7 @@ fn init(scene: usize) -> RveHandle {
     h
 }
 
-fn save(h: RveHandle) -> (u32, Vec<u8>) {
+pub fn save(h: RveHandle) -> (u32, Vec<u8>) {
     let mut size = 0;
     let s = unsafe { rve_state_size(h, &mut size) };
     if s != OK {
@@ -55,7 +55,7 @@ fn save(h: RveHandle) -> (u32, Vec<u8>) {
     (s, bytes)
 }
 
-fn update(h: RveHandle, strain: [f64; 3], request: i32) -> (u32, [f64; 3], [f64; 9]) {
+pub fn update(h: RveHandle, strain: [f64; 3], request: i32) -> (u32, [f64; 3], [f64; 9]) {
     let (mut stress, mut tangent) = ([f64::NAN; 3], [f64::NAN; 9]);
     let s = unsafe {
         rve_update(
@@ -69,7 +69,7 @@ fn update(h: RveHandle, strain: [f64; 3], request: i32) -> (u32, [f64; 3], [f64;
     (s, stress, tangent)
 }
 
-fn load(h: RveHandle, bytes: &[u8]) -> u32 {
+pub fn load(h: RveHandle, bytes: &[u8]) -> u32 {
     unsafe { rve_state_load(h, bytes.as_ptr(), bytes.len()) }
 }
 
