@@ -446,9 +446,10 @@ pub unsafe extern "C" fn rve_state_save(
 
 /// Replaces the instance's committed state by the state in `buf[0..len)` (written by
 /// `rve_state_save` for an instance of the same scene) and discards the trial. Refused,
-/// with the instance unchanged, when the bytes are not a state (`BAD_STATE`), come from
-/// an unsupported format version (`STATE_VERSION`) or from a model of another scene
-/// (`STATE_MISMATCH`). Also `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
+/// with the instance unchanged, when the bytes are not a state or were corrupted (a
+/// checksum covers every byte: `BAD_STATE`), come from an unsupported format version
+/// (`STATE_VERSION`) or from a model of another scene (`STATE_MISMATCH`). Also
+/// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
 ///
 /// # Safety
 /// Each non-NULL pointer must point to valid memory of the documented size (strings:

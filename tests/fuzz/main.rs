@@ -7,3 +7,4 @@ mod call_sequences;
 mod driver;
 mod gmsh_files;
 mod scene_text;
+mod state_bytes;
