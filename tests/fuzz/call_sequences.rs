@@ -523,7 +523,7 @@ fn call_sequences_keep_the_committed_state() {
     let baseline = live_instances();
     driver::run(
         "call_sequences",
-        60,
+        400,
         Duration::from_secs(120),
         |u: &mut Unstructured, tally: &mut Tally| {
             let mut world = World {
@@ -570,7 +570,7 @@ fn a_save_and_load_mid_path_continues_bit_identically() {
     let keep = init(0);
     driver::run(
         "save_load_mid_path",
-        12,
+        30,
         Duration::from_secs(120),
         |u: &mut Unstructured, tally: &mut Tally| {
             let steps = u.int_in_range(4..=14).unwrap_or(4);

@@ -394,7 +394,7 @@ fn mutated_gmsh_files_are_refused_by_line_or_run() {
     let scratch = scratch();
     driver::run(
         "gmsh_files",
-        1500,
+        5000,
         Duration::from_secs(60),
         |u: &mut Unstructured, tally: &mut Tally| {
             let (name, original) = &files[u.choose_index(files.len()).unwrap_or(0)];

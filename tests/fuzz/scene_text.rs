@@ -296,7 +296,7 @@ fn mutated_scenes_are_refused_by_key_or_run() {
     assert!(scenes.len() >= 10, "found {} scenes", scenes.len());
     driver::run(
         "scene_text",
-        300,
+        1000,
         Duration::from_secs(120),
         |u: &mut Unstructured, tally: &mut Tally| {
             let (base, original) = &scenes[u.choose_index(scenes.len()).unwrap_or(0)];

@@ -113,7 +113,7 @@ fn corrupted_state_bytes_are_refused_and_change_nothing() {
     let target = init(0);
     driver::run(
         "state_bytes",
-        2000,
+        5000,
         Duration::from_secs(30),
         |u: &mut Unstructured, tally: &mut Tally| {
             // The target starts from one of our states.
