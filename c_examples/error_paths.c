@@ -196,9 +196,13 @@ int main(int argc, char **argv) {
     EXPECT(rve_state_load(h2, bytes, size), RVE_STATUS_OK);
     EXPECT(rve_state_load(h2, (const uint8_t *)"garbage", 7), RVE_STATUS_BAD_STATE);
     EXPECT(rve_state_load(h2, bytes, size / 2), RVE_STATUS_BAD_STATE);
-    bytes[8] ^= 0x7f; /* format version */
-    EXPECT(rve_state_load(h2, bytes, size), RVE_STATUS_STATE_VERSION);
+    bytes[8] ^= 0x7f; /* format version: the checksum covers it */
+    EXPECT(rve_state_load(h2, bytes, size), RVE_STATUS_BAD_STATE);
     bytes[8] ^= 0x7f;
+    bytes[size / 2] ^= 0x10; /* one flipped bit anywhere */
+    EXPECT(rve_state_load(h2, bytes, size), RVE_STATUS_BAD_STATE);
+    bytes[size / 2] ^= 0x10;
+    EXPECT(rve_state_load(h2, bytes, size), RVE_STATUS_OK);
     EXPECT(rve_init_file(other_path, &other), RVE_STATUS_OK);
     EXPECT(rve_state_load(other, bytes, size), RVE_STATUS_STATE_MISMATCH);
     free(bytes);

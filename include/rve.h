@@ -54,7 +54,8 @@ typedef enum RveStatus {
   RVE_STATUS_INVALID_ARGUMENT = 10,
   // The output buffer is too small; the required size was written where documented.
   RVE_STATUS_BUFFER_TOO_SMALL = 11,
-  // State bytes are not a mesorve state (bad magic, truncated or undecodable).
+  // State bytes are not a mesorve state (bad magic, truncated or undecodable) or were
+  // corrupted (their checksum does not match: any flipped bit).
   RVE_STATUS_BAD_STATE = 12,
   // State bytes were written in a state format this library does not read.
   RVE_STATUS_STATE_VERSION = 13,
@@ -306,9 +307,10 @@ uint32_t rve_state_save(RveHandle h, uint8_t *buf, size_t len, size_t *written);
 
 // Replaces the instance's committed state by the state in `buf[0..len)` (written by
 // `rve_state_save` for an instance of the same scene) and discards the trial. Refused,
-// with the instance unchanged, when the bytes are not a state (`BAD_STATE`), come from
-// an unsupported format version (`STATE_VERSION`) or from a model of another scene
-// (`STATE_MISMATCH`). Also `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
+// with the instance unchanged, when the bytes are not a state or were corrupted (a
+// checksum covers every byte: `BAD_STATE`), come from an unsupported format version
+// (`STATE_VERSION`) or from a model of another scene (`STATE_MISMATCH`). Also
+// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
 //
 // # Safety
 // Each non-NULL pointer must point to valid memory of the documented size (strings:

@@ -287,6 +287,17 @@ fn curvature_bytes(n: usize, filled: bool) -> usize {
     1 + 24 + 8 + 4 * scales + 8 + values
 }
 
+/// Bytes of the trailing CRC-32C of state format 6.
+const CHECKSUM: usize = 4;
+
+/// State bytes of format >= 6 with their trailing checksum recomputed (a deliberate edit).
+fn with_checksum(mut bytes: Vec<u8>) -> Vec<u8> {
+    let body = bytes.len() - CHECKSUM;
+    let sum = crc32c::crc32c(&bytes[..body]);
+    bytes[body..].copy_from_slice(&sum.to_le_bytes());
+    bytes
+}
+
 #[test]
 fn state_bytes_round_trip_and_refuse_foreign_states() {
     let h = init_paper();
@@ -324,17 +335,23 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     assert_eq!(load(&[1, 2, 3]), RveStatus::BadState as u32);
     assert_eq!(load(&[0u8; 100]), RveStatus::BadState as u32);
     assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
-    for unknown_version in [0u8, 6] {
+    // A format this library does not know, with a valid checksum (a later version), is
+    // STATE_VERSION; the same version change without a new checksum is corruption.
+    for unknown_version in [0u8, 7] {
         let mut other_version = bytes.clone();
         other_version[8] = unknown_version;
-        assert_eq!(load(&other_version), RveStatus::StateVersion as u32);
+        assert_eq!(load(&other_version), RveStatus::BadState as u32);
+        assert_eq!(
+            load(&with_checksum(other_version)),
+            RveStatus::StateVersion as u32
+        );
     }
     // A negative delta_max is refused, and the instance keeps its state.
     // The payload ends with the history, the sensitivity and the path curvature, both
-    // filled by the committed updates with tangent.
+    // filled by the committed updates with tangent, then the checksum.
     let mut negative = bytes.clone();
     let n = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
-    let curvature_at = negative.len() - curvature_bytes(n, true);
+    let curvature_at = negative.len() - CHECKSUM - curvature_bytes(n, true);
     assert_eq!(
         bytes[curvature_at], 1,
         "the path curvature is filled and valid"
@@ -342,6 +359,13 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     let last = curvature_at - sensitivity_bytes(n) - 8;
     negative[last..last + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
     assert_eq!(load(&negative), RveStatus::BadState as u32);
+    let negative = with_checksum(negative);
+    assert_eq!(load(&negative), RveStatus::BadState as u32);
+    assert!(
+        last_error_message().contains("delta_max"),
+        "{}",
+        last_error_message()
+    );
     let (_, sig_c, _) = update(h2, next);
     assert_eq!(sig_a.map(f64::to_bits), sig_c.map(f64::to_bits));
     let gmsh = CString::new(
@@ -504,8 +528,8 @@ fn one_instance_from_two_threads_is_busy_or_fine_never_corrupt() {
 /// update to `[1.5e-4, 0, 0]` (made by `scripts/make_state_format1.sh`, kept for this
 /// test). This library reads it, and the restarted instance continues like one that
 /// computed the same state itself, to the Newton tolerance (see below). Format 2 (no
-/// sensitivity), format 3 (a 16-bit sensitivity, dropped on loading) and format 4 (no
-/// path curvature) states load too.
+/// sensitivity), format 3 (a 16-bit sensitivity, dropped on loading), format 4 (no path
+/// curvature) and format 5 (no checksum) states load too.
 #[test]
 fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
     let bytes = std::fs::read(common::repo("tests/data/state_format1_paper_rve.bin")).unwrap();
@@ -532,7 +556,7 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         "{sig_old:?} vs {sig_new:?}"
     );
     assert!(rel(&d_old, &d_new) <= 1e-6, "{d_old:?} vs {d_new:?}");
-    // Saved again, it is the current format (5) with the sensitivity (the increment from
+    // Saved again, it is the current format (6) with the sensitivity (the increment from
     // the elastic predictor left the path curvature empty), and loads back.
     let mut size = 0;
     assert_eq!(rve_commit(old), OK);
@@ -543,12 +567,13 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         unsafe { rve_state_save(old, saved.as_mut_ptr(), size, &mut written) },
         OK
     );
-    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 5);
+    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 6);
     assert_eq!(
         unsafe { rve_state_load(fresh, saved.as_ptr(), written) },
         OK
     );
-    // Format 4: the same payload without the trailing path curvature.
+    // Format 5: format 6 without the checksum; format 4: without the path curvature
+    // either.
     let n = u64::from_le_bytes(saved[16..24].try_into().unwrap()) as usize;
     let with_version = |mut bytes: Vec<u8>, version: u32| {
         bytes[8..12].copy_from_slice(&version.to_le_bytes());
@@ -556,7 +581,8 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         bytes[32..40].copy_from_slice(&payload.to_le_bytes());
         bytes
     };
-    let format4_len = written - curvature_bytes(n, false);
+    let format5 = with_version(saved[..written - CHECKSUM].to_vec(), 5);
+    let format4_len = written - CHECKSUM - curvature_bytes(n, false);
     let format4 = with_version(saved[..format4_len].to_vec(), 4);
     // Format 2: without the sensitivity either.
     let format2 = with_version(saved[..format4_len - sensitivity_bytes(n)].to_vec(), 2);
@@ -571,6 +597,15 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
     // Format 4 keeps the sensitivity: the state is the one `old` has, bit for bit.
     assert_eq!(
         unsafe { rve_state_load(fresh, format4.as_ptr(), format4.len()) },
+        OK
+    );
+    let (s, sig, d) = update(fresh, [1.7e-4, 0.0, 0.0]);
+    assert_eq!(s, OK);
+    assert_eq!(sig.map(f64::to_bits), sig_old.map(f64::to_bits));
+    assert_eq!(d.map(f64::to_bits), d_old.map(f64::to_bits));
+    // Format 5 is format 6 less the checksum: the same state, bit for bit.
+    assert_eq!(
+        unsafe { rve_state_load(fresh, format5.as_ptr(), format5.len()) },
         OK
     );
     let (s, sig, d) = update(fresh, [1.7e-4, 0.0, 0.0]);

@@ -264,15 +264,33 @@ pub unsafe extern "C" fn rve_update_ex(
     info: *mut RveInfo,
 ) -> u32 {
     guard("rve_update_ex", || {
-        let request = RveTangentRequest::from_i32(tangent_request)?;
-        let strain: [f64; 3] = slice(strain, 3, "strain")?.try_into().expect("3");
-        let stress = slice_mut(stress, 3, "stress")?;
-        let tangent = if request == RveTangentRequest::None {
-            None
-        } else {
-            Some(slice_mut(tangent, 9, "tangent")?)
+        let args = (|| {
+            let request = RveTangentRequest::from_i32(tangent_request)?;
+            let strain: [f64; 3] = slice(strain, 3, "strain")?.try_into().expect("3");
+            let stress = slice_mut(stress, 3, "stress")?;
+            let tangent = if request == RveTangentRequest::None {
+                None
+            } else {
+                Some(slice_mut(tangent, 9, "tangent")?)
+            };
+            Ok((request, strain, stress, tangent))
+        })();
+        let entry = registry::get(h);
+        let (request, strain, stress, tangent) = match args {
+            Ok(args) => args,
+            Err(f) => {
+                // After any failure there is no trial to commit, bad arguments included.
+                if let Ok(mut instance) = entry
+                    .as_ref()
+                    .map_err(|_| ())
+                    .and_then(|e| e.lock().map_err(|_| ()))
+                {
+                    instance.revert();
+                }
+                return Err(f);
+            }
         };
-        let entry = registry::get(h)?;
+        let entry = entry?;
         match update_entry(&entry, strain, request) {
             Ok(r) => {
                 stress.copy_from_slice(&r.stress);
@@ -428,9 +446,10 @@ pub unsafe extern "C" fn rve_state_save(
 
 /// Replaces the instance's committed state by the state in `buf[0..len)` (written by
 /// `rve_state_save` for an instance of the same scene) and discards the trial. Refused,
-/// with the instance unchanged, when the bytes are not a state (`BAD_STATE`), come from
-/// an unsupported format version (`STATE_VERSION`) or from a model of another scene
-/// (`STATE_MISMATCH`). Also `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
+/// with the instance unchanged, when the bytes are not a state or were corrupted (a
+/// checksum covers every byte: `BAD_STATE`), come from an unsupported format version
+/// (`STATE_VERSION`) or from a model of another scene (`STATE_MISMATCH`). Also
+/// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY`, `PANIC`.
 ///
 /// # Safety
 /// Each non-NULL pointer must point to valid memory of the documented size (strings:

@@ -38,7 +38,8 @@ pub enum RveStatus {
     InvalidArgument = 10,
     /// The output buffer is too small; the required size was written where documented.
     BufferTooSmall = 11,
-    /// State bytes are not a mesorve state (bad magic, truncated or undecodable).
+    /// State bytes are not a mesorve state (bad magic, truncated or undecodable) or were
+    /// corrupted (their checksum does not match: any flipped bit).
     BadState = 12,
     /// State bytes were written in a state format this library does not read.
     StateVersion = 13,

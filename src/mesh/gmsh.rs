@@ -82,7 +82,7 @@ use std::path::Path;
 use std::str::FromStr;
 
 use crate::error::{Error, Result};
-use crate::mesh::{Phase, PhaseMesh, Triangle};
+use crate::mesh::{Phase, PhaseMesh, Triangle, MAX_TRIANGLES};
 
 /// Name of the physical surface group of the matrix in files we write.
 pub const MATRIX_GROUP: &str = "matrix";
@@ -102,6 +102,15 @@ const DEGENERATE_RELATIVE_AREA: f64 = 1e-10;
 /// in `x` and `y` (round-off from CAD kernels stays far below it).
 const PLANAR_RELATIVE_Z: f64 = 1e-10;
 
+/// Largest MSH file read, in bytes: a mesh at the scene limit of
+/// [`MAX_TRIANGLES`] triangles takes about 150 MB in either
+/// version, and the reader holds the text and an index of its lines.
+pub const MAX_FILE_BYTES: u64 = 512 << 20;
+
+/// Largest node or element count a file may declare (in a header or a 4.1 block): twice
+/// the scene limit on triangles, room for the lines and points Gmsh adds.
+pub const MAX_DECLARED_ITEMS: usize = 2 * MAX_TRIANGLES;
+
 /// Element types (Gmsh numbering) the reader understands.
 const POINT: i64 = 15;
 const LINE: i64 = 1;
@@ -112,10 +121,23 @@ const TRIANGLE: i64 = 2;
 /// The file is read as bytes and decoded leniently, so that a binary file is reported as
 /// such (from its `$MeshFormat` line) rather than as invalid UTF-8.
 pub fn read_msh(path: &Path, matrix_group: &str, inclusion_groups: &[String]) -> Result<PhaseMesh> {
-    let bytes = fs::read(path).map_err(|source| Error::Io {
+    let io_error = |source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let size = fs::metadata(path).map_err(io_error)?.len();
+    if size > MAX_FILE_BYTES {
+        return Err(Error::Gmsh {
+            path: path.to_path_buf(),
+            line: 1,
+            reason: format!(
+                "the file has {size} bytes, more than the limit of {MAX_FILE_BYTES} bytes for \
+                 an RVE mesh (at most {} triangles)",
+                MAX_TRIANGLES
+            ),
+        });
+    }
+    let bytes = fs::read(path).map_err(io_error)?;
     let text = String::from_utf8_lossy(&bytes);
     parse_msh(&text, path, matrix_group, inclusion_groups)
 }
@@ -316,6 +338,20 @@ impl<'a> Record<'a> {
     /// A count or a tag: a non-negative integer.
     fn count(&mut self, what: &str) -> Result<usize> {
         self.parse(what)
+    }
+
+    /// A node or element count, at most [`MAX_DECLARED_ITEMS`]: a larger one is refused
+    /// before anything is read for it.
+    fn declared(&mut self, what: &str) -> Result<usize> {
+        let count = self.count(what)?;
+        if count > MAX_DECLARED_ITEMS {
+            return Err(self.error(format!(
+                "{what} {count} is more than the limit of {MAX_DECLARED_ITEMS} (RVE meshes \
+                 have at most {} triangles)",
+                MAX_TRIANGLES
+            )));
+        }
+        Ok(count)
     }
 
     fn tag(&mut self, what: &str) -> Result<u64> {
@@ -520,7 +556,7 @@ fn read_v22(r: &mut Reader) -> Result<RawMesh> {
 
 fn read_v22_nodes(r: &mut Reader, raw: &mut RawMesh) -> Result<()> {
     let mut count_line = r.next("the number of nodes")?;
-    let count = count_line.count("number of nodes")?;
+    let count = count_line.declared("number of nodes")?;
     count_line.end()?;
     for _ in 0..count {
         let mut line = r.next("a node")?;
@@ -538,7 +574,7 @@ fn read_v22_nodes(r: &mut Reader, raw: &mut RawMesh) -> Result<()> {
 
 fn read_v22_elements(r: &mut Reader, raw: &mut RawMesh) -> Result<()> {
     let mut count_line = r.next("the number of elements")?;
-    let count = count_line.count("number of elements")?;
+    let count = count_line.declared("number of elements")?;
     count_line.end()?;
     // Triangles already seen, by sorted node tags: Gmsh writes a triangle that is in
     // several physical groups once per group.
@@ -673,7 +709,7 @@ fn read_v41_entities(r: &mut Reader, surfaces: &mut HashMap<i64, Vec<i64>>) -> R
 fn read_block_header(r: &mut Reader, items: &str) -> Result<(usize, usize, usize)> {
     let mut line = r.next(&format!("the {items} header"))?;
     let blocks = line.count("number of entity blocks")?;
-    let count = line.count(&format!("number of {items}"))?;
+    let count = line.declared(&format!("number of {items}"))?;
     line.tag(&format!("minimum {items} tag"))?;
     line.tag(&format!("maximum {items} tag"))?;
     line.end()?;
@@ -688,7 +724,7 @@ fn read_v41_nodes(r: &mut Reader, raw: &mut RawMesh) -> Result<()> {
         let dim = block.int("entity dimension")?;
         block.int("entity tag")?;
         let parametric = block.int("parametric flag")?;
-        let count = block.count("number of nodes in the block")?;
+        let count = block.declared("number of nodes in the block")?;
         block.end()?;
         let extra = match (parametric, dim) {
             (0, _) => 0,
@@ -743,7 +779,7 @@ fn read_v41_elements(
         let dim = block.int("entity dimension")?;
         let entity = block.int("entity tag")?;
         let element_type = block.int("element type")?;
-        let count = block.count("number of elements in the block")?;
+        let count = block.declared("number of elements in the block")?;
         let Some(node_count) = nodes_per_element(element_type) else {
             return Err(unsupported_element(&block, element_type));
         };
@@ -828,6 +864,14 @@ fn assemble(
             r.last_line,
             "the file contains no triangles (element type 2)",
         ));
+    }
+    if triangles.len() > MAX_TRIANGLES {
+        let reason = format!(
+            "the file holds {} triangles, more than the limit of {} for an RVE mesh",
+            triangles.len(),
+            MAX_TRIANGLES
+        );
+        return Err(r.error(r.last_line, reason));
     }
 
     // Phase and raw node indices of each triangle.

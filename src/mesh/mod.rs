@@ -14,3 +14,7 @@ pub use model::{
 };
 pub use stats::{triangle_angles_deg, MeshStats};
 pub use triangulate::{triangulate, triangulate_straight_interface};
+
+/// Most triangles an RVE mesh may have, generated (scene validation refuses a `mesh.size`
+/// that would give more) or imported from Gmsh.
+pub const MAX_TRIANGLES: usize = 2_000_000;

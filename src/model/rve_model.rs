@@ -184,6 +184,20 @@ impl Model {
             TangentRequest::Consistent => self.hom.szz_tangent(ws.factorization().kg()),
             TangentRequest::None => [0.0; 3],
         };
+        // A converged residual does not exclude overflow in the tangent or the stress
+        // (material constants near the ends of the f64 range): never hand out NaN.
+        let mut outputs = stress.iter().chain(&tangent).chain(&s_zz_tangent);
+        if !(outputs.all(|v| v.is_finite()) && s_zz.is_finite()) {
+            return Err(Error::Solve {
+                reason: format!(
+                    "the homogenized stress {stress:?} or tangent is not finite (NaN or \
+                     infinite): the scene's material constants are out of floating-point \
+                     range for this RVE"
+                ),
+                depth: 0,
+                suggested_step_ratio: 0.5,
+            });
+        }
         Ok(Response {
             stress,
             tangent,

@@ -16,3 +16,4 @@ pub use schema::{
     InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec, MeshSpec, PathSegment,
     PenaltySpec, SceneSpec, SolverSpec, StraightInterfaceSpec,
 };
+pub use validate::{MAX_PATH_INCREMENTS, MAX_TRIANGLES};

@@ -7,8 +7,11 @@ use crate::geometry::{Explicit, Orientation, RandomSpec, ShapeKind};
 
 /// Densest random packing we attempt; above it random sequential placement jams.
 pub const MAX_AREA_FRACTION: f64 = 0.7;
-/// Upper bound on the estimated triangle count, to refuse runaway mesh sizes.
-pub const MAX_TRIANGLES: f64 = 2.0e6;
+// The bound on the estimated triangle count, to refuse runaway mesh sizes.
+pub use crate::mesh::MAX_TRIANGLES;
+/// Upper bound on the increments of the whole strain path (all `[[path]]` segments): the
+/// path is materialized as one strain per increment.
+pub const MAX_PATH_INCREMENTS: u64 = 1_000_000;
 
 fn positive(key: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
@@ -104,11 +107,11 @@ impl SceneSpec {
         let h_itz = m.interface_size.unwrap_or(m.size);
         positive("mesh.interface_size", h_itz)?;
         let estimate = 2.0 * w * h / (0.5 * 3f64.sqrt() * m.size.min(h_itz).powi(2));
-        if estimate > MAX_TRIANGLES {
+        if estimate > MAX_TRIANGLES as f64 {
             return Err(Error::scene(
                 "mesh.size",
                 format!(
-                    "would give about {estimate:.0} triangles, more than the limit {MAX_TRIANGLES:.0}"
+                    "would give about {estimate:.0} triangles, more than the limit {MAX_TRIANGLES}"
                 ),
             ));
         }
@@ -194,11 +197,22 @@ impl SceneSpec {
             ));
         }
 
+        let mut total: u64 = 0;
         for (k, seg) in self.path.iter().enumerate() {
-            if seg.increments == 0 || seg.increments > 1_000_000 {
+            if seg.increments == 0 || u64::from(seg.increments) > MAX_PATH_INCREMENTS {
                 return Err(Error::scene(
                     format!("path[{k}].increments"),
-                    "must lie in 1..=1000000",
+                    format!("must lie in 1..={MAX_PATH_INCREMENTS}"),
+                ));
+            }
+            total += u64::from(seg.increments);
+            if total > MAX_PATH_INCREMENTS {
+                return Err(Error::scene(
+                    format!("path[{k}].increments"),
+                    format!(
+                        "the path's segments up to this one add up to {total} increments, more \
+                         than the limit {MAX_PATH_INCREMENTS} for a whole path"
+                    ),
                 ));
             }
             if seg

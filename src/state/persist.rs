@@ -1,5 +1,5 @@
 //! Checkpointing: a [`State`] as versioned bytes, and back. A fixed header, then the state
-//! encoded by serde (bincode 1, little-endian, fixed-width integers).
+//! encoded by serde (bincode 1, little-endian, fixed-width integers), then a checksum.
 //!
 //! ```text
 //! offset  size  field
@@ -8,12 +8,20 @@
 //!     12     4  reserved, 0
 //!     16     8  number of unknowns of the model (u64 LE)
 //!     24     8  number of interface history points of the model (u64 LE)
-//!     32     8  payload length in bytes (u64 LE)
+//!     32     8  payload length in bytes (u64 LE), without the checksum
 //!     40     .  payload: bincode of `State`
+//!   40+len   4  CRC-32C (Castagnoli) of every byte before it (u32 LE); formats >= 6
 //! ```
-//! A reader refuses another magic or a truncated buffer ([`Error::BadState`]), an unknown
-//! format version ([`Error::StateVersion`]: a later format adds a decoder here and keeps
-//! reading the old ones), and a model of other sizes ([`Error::StateMismatch`]).
+//! A reader refuses another magic or a buffer shorter than the header
+//! ([`Error::BadState`]). Unless the version is one of the old formats 1-5, which carry
+//! no checksum, it then checks the CRC-32C of the whole buffer before anything else, so
+//! that any flipped bit (in the header too) and any truncation is [`Error::BadState`];
+//! CRC-32C detects every error of up to 3 bits in buffers of this size, and all but one
+//! in 2^32 of the others. A version bit flipped from 6 to an old format (4 or 2) is
+//! refused by the payload length, which leaves the checksum out. Then it refuses an
+//! unknown format version ([`Error::StateVersion`]: a later format adds a decoder here,
+//! keeps the trailing checksum and keeps reading the old ones), and a model of other
+//! sizes ([`Error::StateMismatch`]).
 //!
 //! | format | library | payload history |
 //! |---|---|---|
@@ -21,7 +29,8 @@
 //! | 2 | main after 0.1.0 | `delta_max` per point (read, no sensitivity: the next increment starts from the elastic predictor) |
 //! | 3 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 16-bit (read, sensitivity dropped: the next increment starts from the elastic predictor) |
 //! | 4 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 8-bit by blocks, empty until filled ([`Sensitivity`]) (read, kept) |
-//! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`PathCurvature`](super::PathCurvature)) (written) |
+//! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`PathCurvature`](super::PathCurvature)) (read, kept) |
+//! | 6 | main after 0.1.0 | format 5 plus the trailing CRC-32C (written) |
 //!
 //! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
 //! model, so this module depends on the state alone; `model::Instance::save_state` and
@@ -34,10 +43,12 @@ use crate::error::{Error, Result};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format written; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 5;
-/// Older formats this library still reads.
-pub const READABLE_OLD_FORMATS: [u32; 4] = [1, 2, 3, 4];
+pub const STATE_FORMAT_VERSION: u32 = 6;
+/// Older formats this library still reads (without a checksum).
+pub const READABLE_OLD_FORMATS: [u32; 5] = [1, 2, 3, 4, 5];
 const HEADER: usize = 40;
+/// Bytes of the trailing CRC-32C.
+const CHECKSUM: usize = 4;
 
 /// The sizes of the model a state belongs to, recorded in the header: a state loads only
 /// into a model of the same sizes.
@@ -52,13 +63,13 @@ pub struct StateSizes {
 /// Bytes [`encode`] writes for `state`.
 pub fn encoded_len(state: &State) -> Result<usize> {
     let payload = bincode::serialized_size(state).map_err(encoding)?;
-    Ok(HEADER + payload as usize)
+    Ok(HEADER + payload as usize + CHECKSUM)
 }
 
 /// Encodes `state`, a state of a model of `sizes`, in the current format.
 pub fn encode(state: &State, sizes: StateSizes) -> Result<Vec<u8>> {
     let payload = bincode::serialize(state).map_err(encoding)?;
-    let mut out = Vec::with_capacity(HEADER + payload.len());
+    let mut out = Vec::with_capacity(HEADER + payload.len() + CHECKSUM);
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&STATE_FORMAT_VERSION.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
@@ -66,6 +77,8 @@ pub fn encode(state: &State, sizes: StateSizes) -> Result<Vec<u8>> {
     out.extend_from_slice(&(sizes.history as u64).to_le_bytes());
     out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
     out.extend_from_slice(&payload);
+    let checksum = crc32c::crc32c(&out);
+    out.extend_from_slice(&checksum.to_le_bytes());
     Ok(out)
 }
 
@@ -83,6 +96,11 @@ pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
         return Err(bad("no mesorve magic (not a saved state)"));
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    let bytes = if READABLE_OLD_FORMATS.contains(&version) {
+        bytes
+    } else {
+        checked(bytes, version)?
+    };
     if version != STATE_FORMAT_VERSION && !READABLE_OLD_FORMATS.contains(&version) {
         return Err(Error::StateVersion {
             found: version,
@@ -132,6 +150,26 @@ pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
     Ok(state)
 }
 
+/// The bytes before the trailing checksum, if it matches them.
+fn checked(bytes: &[u8], version: u32) -> Result<&[u8]> {
+    if bytes.len() < HEADER + CHECKSUM {
+        return Err(bad(format!(
+            "{} bytes, too short for a format {version} state and its checksum",
+            bytes.len()
+        )));
+    }
+    let (body, stored) = bytes.split_at(bytes.len() - CHECKSUM);
+    let stored = u32::from_le_bytes(stored.try_into().expect("4 bytes"));
+    let computed = crc32c::crc32c(body);
+    if stored != computed {
+        return Err(bad(format!(
+            "checksum mismatch (stored {stored:#010x}, computed {computed:#010x}): the \
+             bytes were corrupted or truncated"
+        )));
+    }
+    Ok(body)
+}
+
 fn bad(reason: impl Into<String>) -> Error {
     Error::BadState {
         reason: reason.into(),
@@ -158,6 +196,7 @@ fn payload(version: u32, payload: &[u8]) -> Result<State> {
         2 => read::<Format2>(payload)?.into(),
         3 => read::<Format3>(payload)?.into(),
         4 => read::<Format4>(payload)?.into(),
+        // Formats 5 and 6 have the same payload.
         _ => read::<State>(payload)?,
     })
 }
@@ -298,16 +337,31 @@ mod tests {
         let mut other = bytes.clone();
         other[0] = b'X';
         assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
+        // A later format with its checksum is StateVersion; a changed version without
+        // a new checksum is corruption.
         let mut other = bytes.clone();
-        other[8] = 6;
+        other[8] = 7;
+        assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
+        let body = other.len() - CHECKSUM;
+        let sum = crc32c::crc32c(&other[..body]);
+        other[body..].copy_from_slice(&sum.to_le_bytes());
         assert!(matches!(
             decode(&other, SIZES),
             Err(Error::StateVersion {
-                found: 6,
-                current: 5,
+                found: 7,
+                current: 6,
                 ..
             })
         ));
+        // Any single flipped bit is BadState, in the header as in the payload.
+        for bit in 0..8 * bytes.len() {
+            let mut flipped = bytes.clone();
+            flipped[bit / 8] ^= 1 << (bit % 8);
+            assert!(
+                matches!(decode(&flipped, SIZES), Err(Error::BadState { .. })),
+                "bit {bit}"
+            );
+        }
         let bigger = StateSizes {
             unknowns: 8,
             ..SIZES
