@@ -90,18 +90,25 @@ fn a_refused_load_changes_nothing() {
 
     let mut truncated = bytes.clone();
     truncated.pop();
+    // A later format with its own checksum; the same version change without one is
+    // corruption.
     let mut future = bytes.clone();
-    future[8..12].copy_from_slice(&6u32.to_le_bytes());
+    future[8..12].copy_from_slice(&7u32.to_le_bytes());
+    let e = inst.load_state(&future).unwrap_err();
+    assert!(matches!(e, Error::BadState { .. }), "{e}");
+    let body = future.len() - 4;
+    let checksum = crc32c::crc32c(&future[..body]);
+    future[body..].copy_from_slice(&checksum.to_le_bytes());
     let other_scene = common::scene("scenes/gmsh_two_circles.toml");
     let other_model = Arc::new(Model::from_scene(&other_scene).unwrap());
     let foreign = Instance::new(other_model).save_state().unwrap();
     let e = inst.load_state(&truncated).unwrap_err();
     assert!(matches!(e, Error::BadState { .. }), "{e}");
     let e = inst.load_state(&future).unwrap_err();
-    assert!(matches!(e, Error::StateVersion { found: 6, .. }), "{e}");
+    assert!(matches!(e, Error::StateVersion { found: 7, .. }), "{e}");
     assert_eq!(
         e.to_string(),
-        "state format version 6; this library reads versions [1, 2, 3, 4] and 5"
+        "state format version 7; this library reads versions [1, 2, 3, 4, 5] and 6"
     );
     let e = inst.load_state(&foreign).unwrap_err();
     assert!(matches!(e, Error::StateMismatch { .. }), "{e}");
