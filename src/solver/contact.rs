@@ -95,3 +95,14 @@ pub(super) fn update(problem: &Problem, x: &[f64], ws: &mut Workspace) -> usize 
 pub(super) fn held(ws: &Workspace) -> bool {
     ws.contact.held
 }
+
+/// How many points the last loop holds at a status that the gaps at its converged iterate
+/// `x` contradict.
+pub(super) fn held_against_gap(problem: &Problem, x: &[f64], ws: &mut Workspace) -> usize {
+    let c = &mut ws.contact;
+    if !c.held {
+        return 0;
+    }
+    problem.disc.contact_status(x, &mut c.read);
+    c.now.iter().zip(&c.read).filter(|(a, b)| a != b).count()
+}

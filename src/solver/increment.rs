@@ -128,6 +128,7 @@ pub fn solve_increment(
     let counts = ws.current.counts;
     (report.loading, report.unloading, report.contact) =
         (counts.loading, counts.unloading, counts.contact);
+    report.held_points = contact::held_against_gap(problem, &trial.unknowns, ws);
     let mut solved = [0.0; 9];
     if request == TangentRequest::Consistent {
         solved = condensed_tangent(problem, ws)?;

@@ -71,4 +71,8 @@ pub struct IncrementReport {
     pub loading: usize,
     pub unloading: usize,
     pub contact: usize,
+    /// Interface points held at the end at a contact status their gap contradicts (see
+    /// `contact`): 0 means the converged state is an equilibrium of the law with the
+    /// status read from the gaps.
+    pub held_points: usize,
 }
