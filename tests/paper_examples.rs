@@ -525,15 +525,18 @@ fn ellipses_against_circles() {
         assert!(r[k].stress[0] < c[k].stress[0], "increment {}", k + 1);
     }
     // After the peak (increments 14-20): the same-centre ellipses carry less stress at
-    // every increment, on average by more than 10 % (measured: 33 % falling to 5 %, mean
-    // 16 %).
+    // every increment, on average by more than 5 % (measured: 15 % falling to 7.6 %, mean
+    // 9 %; the circles snap at increment 14, as with `contact_shear = "cohesive"`. Before
+    // the contact status was held within a Newton iteration the trace of that increment
+    // was lost on the paper's law and the secant iterations found the circles still on
+    // their pre-peak branch, 33 % falling to 5 %, mean 16 %).
     let mut deficit = 0.0;
     for k in 13..20 {
         assert!(s[k].stress[0] < c[k].stress[0], "increment {}", k + 1);
         deficit += (1.0 - s[k].stress[0] / c[k].stress[0]) / 7.0;
     }
     println!("post-peak mean deficit of the same-centre ellipses {deficit:.3}");
-    assert!(deficit > 0.1, "{deficit}");
+    assert!(deficit > 0.05, "{deficit}");
     // Limit points: same-centre ellipses 0.6 % below the circles; the sample ABOVE them.
     let pc = peak_x_periodic();
     let ps = limit_point(&same, X, "same-centre ellipses");
@@ -666,38 +669,44 @@ fn linear_bc_is_stiffer_than_periodic() {
 fn penalty_study() {
     const CYCLE: &str = "scenes/paper_rve_cycle.toml";
     let lambdas = ["1e4", "1e5", "1e6", "1e7", "1e8", "1e9"];
-    let curves: Vec<Vec<Point>> = lambdas
-        .iter()
-        .map(|lp| {
-            let to = format!("lambda_p = {lp} }}, contact_shear = \"cohesive\"");
-            run(CYCLE, &[("lambda_p = 1e5 }", &to)])
-        })
-        .collect();
-    let reference = curves.last().unwrap();
-    let scale = reference
-        .iter()
-        .map(|q| q.stress[0].abs())
-        .fold(0.0, f64::max);
     // Largest stress difference to lambda_p = 1e9 over the cycle, relative to the largest
-    // stress, and the compression stiffness.
-    let dist: Vec<f64> = curves
-        .iter()
-        .map(|c| {
-            c.iter()
-                .zip(reference)
-                .map(|(a, b)| (a.stress[0] - b.stress[0]).abs())
-                .fold(0.0, f64::max)
-                / scale
-        })
-        .collect();
-    for (lp, (d, c)) in lambdas.iter().zip(dist.iter().zip(&curves)) {
-        println!(
-            "lambda_p {lp}: distance to 1e9 {d:.2e}, compression D11 {:.0}, iterations at closure {}",
-            c[59].tangent[0], c[33].iterations
-        );
-    }
-    // Converged from 1e7 up: within 1 % of 1e9 (0.4 % measured) and 1e8 within 0.1 %,
-    // while 1e4 and 1e5 are off by 44 % and 14 %.
+    // stress, for one contact law; every value of lambda_p must go through.
+    let study = |shear: &str| -> (Vec<Vec<Point>>, Vec<f64>) {
+        let curves: Vec<Vec<Point>> = lambdas
+            .iter()
+            .map(|lp| {
+                let to = format!("lambda_p = {lp} }}, contact_shear = \"{shear}\"");
+                run(CYCLE, &[("lambda_p = 1e5 }", &to)])
+            })
+            .collect();
+        let reference = curves.last().unwrap();
+        let scale = reference
+            .iter()
+            .map(|q| q.stress[0].abs())
+            .fold(0.0, f64::max);
+        let dist: Vec<f64> = curves
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .zip(reference)
+                    .map(|(a, b)| (a.stress[0] - b.stress[0]).abs())
+                    .fold(0.0, f64::max)
+                    / scale
+            })
+            .collect();
+        for (lp, (d, c)) in lambdas.iter().zip(dist.iter().zip(&curves)) {
+            println!(
+                "{shear}: lambda_p {lp}: distance to 1e9 {d:.2e}, compression D11 {:.0}, \
+                 iterations at closure {}",
+                c[59].tangent[0], c[33].iterations
+            );
+        }
+        (curves, dist)
+    };
+
+    // Cohesive contact shear. Converged from 1e7 up: within 1 % of 1e9 (0.4 % measured)
+    // and 1e8 within 0.1 %, while 1e4 and 1e5 are off by 43 % and 13 %.
+    let (_, dist) = study("cohesive");
     assert!(dist[3] < 0.01 && dist[4] < 1e-3, "{dist:?}");
     assert!(dist[0] > 0.2 && dist[1] > 0.05, "{dist:?}");
     // The penalty error decays like 1 / lambda_p: at least a factor 3 per decade.
@@ -705,29 +714,27 @@ fn penalty_study() {
         assert!(dist[k + 1] < dist[k] / 3.0, "{dist:?}");
     }
 
-    // The paper's law: 1e4 and 1e5 go through, with compression stiffnesses far apart;
-    // 1e6 and 1e7 fail after the tension peak. Which post-snap equilibrium the increment
-    // after the peak lands on depends on the converged states before it at the level of
-    // the Newton tolerance (several equilibria exist there), and from some of them the
-    // closed, sliding points leave no equilibrium for the next increment (see
-    // `ContactShear`). 1e6 went through before the tangent predictor moved those states
-    // within the tolerance; the cohesive contact shear above goes through for all.
-    let paper: Vec<Vec<Point>> = ["1e4", "1e5"]
+    // The paper's law (with the contact status held within a Newton iteration, the
+    // default; read at every evaluation it failed from 1e6 up, see
+    // docs/contact-algorithm.md): every value goes through, and from 1e7 up the response
+    // is within 1 % of 1e9 (0.78 % and 0.81 % measured: the largest difference is after
+    // the snap, where the increments land on different post-snap equilibria, 3.33 against
+    // 3.43 N/mm²), while 1e4 and 1e5 are off by 47 % and 12 %. At the end of the
+    // compression branch the stress converges first order: 1.5e-3 (1e7), 1.4e-4 (1e8).
+    let (paper, dist) = study("penalty");
+    assert!(dist[3] < 0.01 && dist[4] < 0.01, "{dist:?}");
+    assert!(dist[0] > 0.2 && dist[1] > 0.05, "{dist:?}");
+    let end: Vec<f64> = paper
         .iter()
-        .map(|lp| run(CYCLE, &[("lambda_p = 1e5", &format!("lambda_p = {lp}"))]))
+        .map(|c| (c[59].stress[0] - paper[5][59].stress[0]).abs() / paper[5][59].stress[0].abs())
         .collect();
+    assert!(
+        end[3] < 1e-2 && end[4] < 1e-3 && end[4] < end[3] / 3.0,
+        "{end:?}"
+    );
+    // Its compression stiffness converges above the cohesive shear's (28246 against
+    // 26978 measured): a closed point sticks in shear.
     let stiff: Vec<f64> = paper.iter().map(|c| c[59].tangent[0]).collect();
-    println!("paper's law, compression D11 for 1e4, 1e5: {stiff:.0?}");
-    assert!(stiff[1] > 1.5 * stiff[0]);
-    for lp in ["1e6", "1e7"] {
-        let failed = follow(
-            &model(CYCLE, &[("lambda_p = 1e5", &format!("lambda_p = {lp}"))]),
-            &path_of(CYCLE),
-        );
-        let (k, why) = failed.failure.unwrap_or_else(|| {
-            panic!("lambda_p = {lp} now goes through with the paper's law: update the docs")
-        });
-        println!("paper's law, lambda_p = {lp}: increment {k} fails: {why}");
-        assert!((19..=20).contains(&k), "{lp} fails at increment {k}");
-    }
+    assert!(stiff[1] > 1.5 * stiff[0], "{stiff:?}");
+    assert!((stiff[5] - stiff[3]).abs() < 0.01 * stiff[5], "{stiff:?}");
 }

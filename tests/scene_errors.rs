@@ -40,6 +40,42 @@ fn unknown_keys_are_named() {
     );
 }
 
+/// `solver.contact_status`: the two modes parse, anything else is named with the choices.
+#[test]
+fn contact_status_values() {
+    use rve::scene::ContactStatusSpec;
+    for (text, mode) in [
+        ("active_set", ContactStatusSpec::ActiveSet),
+        ("per_iteration", ContactStatusSpec::PerIteration),
+    ] {
+        let scene = common::paper_scene_with(&[(
+            "[solver]",
+            &format!("[solver]\ncontact_status = \"{text}\""),
+        )]);
+        let scene = Scene::from_toml_str(&scene, common::repo("scenes")).unwrap();
+        assert_eq!(scene.spec.solver.contact_status, mode);
+    }
+    assert_eq!(
+        common::scene("scenes/paper_rve.toml")
+            .spec
+            .solver
+            .contact_status,
+        ContactStatusSpec::ActiveSet
+    );
+    assert_mentions(
+        &error_of(&[("[solver]", "[solver]\ncontact_status = \"per_step\"")]),
+        &[
+            "solver.contact_status",
+            "unknown variant `per_step`",
+            "`active_set` or `per_iteration`",
+        ],
+    );
+    assert_mentions(
+        &error_of(&[("[solver]", "[solver]\ncontact_state = \"active_set\"")]),
+        &["unknown field `contact_state`", "contact_status"],
+    );
+}
+
 #[test]
 fn missing_keys_are_named() {
     assert_mentions(

@@ -210,11 +210,51 @@ impl Discretization {
         r: &mut [f64],
         k: Option<&mut [f64]>,
     ) -> SystemEvaluation {
-        self.evaluate_with(x, eps, committed, trial, r, k, TangentKind::Consistent)
+        self.evaluate_with(
+            x,
+            eps,
+            committed,
+            trial,
+            r,
+            k,
+            TangentKind::Consistent,
+            None,
+        )
+    }
+
+    /// The contact status of every interface point at the unknowns `x`, read from its gap
+    /// ([`interface4::contact_status`]), into `closed` (one entry per point, element-major);
+    /// returns how many are closed. All open without a law that has a contact status.
+    pub fn contact_status(&self, x: &[f64], closed: &mut [bool]) -> usize {
+        closed.fill(false);
+        let Some(law) = self.law.as_deref().filter(|l| l.has_contact_status()) else {
+            return 0;
+        };
+        let np = self.points_per_interface();
+        let mut count = 0;
+        for ((geometry, dofs), out) in self
+            .interfaces
+            .iter()
+            .zip(&self.interface_dofs)
+            .zip(closed.chunks_exact_mut(np))
+        {
+            let u = Self::gather(x, dofs);
+            let st = interface4::contact_status(geometry, self.quadrature, law, &u);
+            out.copy_from_slice(&st[..np]);
+            count += st[..np].iter().filter(|&&c| c).count();
+        }
+        count
+    }
+
+    /// Number of interface quadrature points (entries of a contact status).
+    pub fn interface_points(&self) -> usize {
+        self.interfaces.len() * self.points_per_interface()
     }
 
     /// [`Discretization::evaluate`] with the interface matrix of choice (consistent or
-    /// secant, see [`TangentKind`]).
+    /// secant, see [`TangentKind`]) and the contact status of every interface point held
+    /// (`Some`, one entry per point, element-major) or read from the gaps at `x` (`None`),
+    /// see [`interface4::evaluate_with`].
     #[allow(clippy::too_many_arguments)]
     pub fn evaluate_with(
         &self,
@@ -225,6 +265,7 @@ impl Discretization {
         r: &mut [f64],
         k: Option<&mut [f64]>,
         kind: TangentKind,
+        status: Option<&[bool]>,
     ) -> SystemEvaluation {
         // Linear part: K_const x + G eps.
         self.pattern.mul_symmetric(&self.k_const, x, r);
@@ -248,6 +289,7 @@ impl Discretization {
             return counts;
         };
         let per_element = self.history_per_interface();
+        let np = self.points_per_interface();
         for (e, (geometry, dofs)) in self.interfaces.iter().zip(&self.interface_dofs).enumerate() {
             let u = Self::gather(x, dofs);
             let range = e * per_element..(e + 1) * per_element;
@@ -259,6 +301,7 @@ impl Discretization {
                 &u,
                 &mut trial[range],
                 kind,
+                status.map(|st| &st[e * np..(e + 1) * np]),
             );
             counts.loading += resp.loading;
             counts.unloading += resp.unloading;

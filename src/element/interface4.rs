@@ -226,10 +226,33 @@ pub fn evaluate(
         u,
         trial,
         TangentKind::Consistent,
+        None,
     )
 }
 
-/// [`evaluate`] with a choice of matrix.
+/// The contact status of every quadrature point for the element displacement `u`, as the
+/// law reads it from the gap there ([`InterfaceLaw::is_closed`]); first
+/// `quadrature.num_points()` entries, the rest `false`. The solver takes the status a
+/// Newton loop starts from with this (see [`evaluate_with`]).
+pub fn contact_status(
+    geometry: &InterfaceGeometry,
+    quadrature: InterfaceQuadrature,
+    law: &dyn InterfaceLaw,
+    u: &SVector<f64, 8>,
+) -> [bool; MAX_POINTS] {
+    let jumps = local_jumps(geometry, quadrature, u);
+    let mut out = [false; MAX_POINTS];
+    for (o, j) in out.iter_mut().zip(&jumps).take(quadrature.num_points()) {
+        *o = law.is_closed(*j);
+    }
+    out
+}
+
+/// [`evaluate`] with a choice of matrix and of contact status. `status`: `None` reads the
+/// status of each point from its gap at `u` ([`InterfaceLaw::respond`]); `Some(closed)`
+/// holds it per point ([`InterfaceLaw::respond_as`], at least `quadrature.num_points()`
+/// entries), so that the force is continuous in `u`.
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate_with(
     geometry: &InterfaceGeometry,
     quadrature: InterfaceQuadrature,
@@ -238,6 +261,7 @@ pub fn evaluate_with(
     u: &SVector<f64, 8>,
     trial: &mut [f64],
     kind: TangentKind,
+    status: Option<&[bool]>,
 ) -> InterfaceResponse {
     let rule = quadrature.rule();
     let hl = law.history_len();
@@ -260,13 +284,12 @@ pub fn evaluate_with(
         let shape = [0.5 * (1.0 - xi), 0.5 * (1.0 + xi)];
         let jl = r * (j0 * shape[0] + j1 * shape[1]);
         let span = point * hl..(point + 1) * hl;
-        let p = law.respond(
-            &committed[span.clone()],
-            &mut trial[span],
-            [jl[0], jl[1]],
-            geometry.length,
-            kind,
-        );
+        let jump = [jl[0], jl[1]];
+        let (committed, trial) = (&committed[span.clone()], &mut trial[span]);
+        let p = match status {
+            None => law.respond(committed, trial, jump, geometry.length, kind),
+            Some(st) => law.respond_as(committed, trial, jump, geometry.length, kind, st[point]),
+        };
         let code = match p.branch {
             Branch::Loading => {
                 loading += 1;
@@ -318,7 +341,7 @@ pub fn evaluate_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interface::{CohesiveLaw, ContactShear, Penalty};
+    use crate::interface::{CohesiveHistory, CohesiveLaw, ContactShear, Penalty};
 
     const DC: f64 = 2e-4;
     const QUADS: [InterfaceQuadrature; 2] =
@@ -537,6 +560,74 @@ mod tests {
             &mut two,
         );
         assert!(two[0] > 0.5 * DC);
+    }
+
+    /// A held status per point is passed to the law point by point; the status read from
+    /// the gap is what `contact_status` returns. With the status held the force is
+    /// continuous across closure (Lipschitz, with a kink of the normal stiffness there);
+    /// with the status read from the gap it jumps.
+    #[test]
+    fn held_status_per_point() {
+        let g = geom();
+        // delta_n from +1e-9 dc at node 0 to -1e-9 dc at node 1: the first Gauss point is
+        // open, the last closed, the middle one at delta_n = 0 (open).
+        let u = displacement(&g, [[0.3 * DC, 1e-9 * DC], [0.2 * DC, -1e-9 * DC]]);
+        let committed = history_at(0.5 * DC);
+        let st = contact_status(&g, InterfaceQuadrature::Gauss3, &law(), &u);
+        assert_eq!(st, [false, false, true]);
+        let (r, _) = eval(&g, InterfaceQuadrature::Gauss3, &committed, &u);
+        let at = |u: &SVector<f64, 8>, held: Option<&[bool]>, trial: &mut [f64]| {
+            evaluate_with(
+                &g,
+                InterfaceQuadrature::Gauss3,
+                &law(),
+                &committed,
+                u,
+                trial,
+                TangentKind::Consistent,
+                held,
+            )
+        };
+        let mut trial = [0.0; MAX_POINTS];
+        assert_eq!(at(&u, Some(&st), &mut trial), r);
+        // Largest |F(u + h e_j) - F(u - h e_j)| / 2h over the dofs, with steps of 1e-6 dc
+        // that cross the gaps of 1e-9 dc.
+        let h = 1e-6 * DC;
+        let slope = |held: Option<&[bool]>| {
+            (0..8)
+                .map(|j| {
+                    let mut e = SVector::<f64, 8>::zeros();
+                    e[j] = h;
+                    let mut t = [0.0; MAX_POINTS];
+                    let fp = at(&(u + e), held, &mut t).force;
+                    let fm = at(&(u - e), held, &mut t).force;
+                    (fp - fm).norm() / (2.0 * h)
+                })
+                .fold(0.0, f64::max)
+        };
+        for held in [
+            [false, true, false],
+            [true, true, true],
+            [false, false, false],
+        ] {
+            let mut trial = [0.0; MAX_POINTS];
+            let r = at(&u, Some(&held), &mut trial);
+            let jumps = local_jumps(&g, InterfaceQuadrature::Gauss3, &u);
+            for i in 0..3 {
+                let h = CohesiveHistory {
+                    delta_max: committed[i],
+                };
+                let p = law().evaluate_as(&h, jumps[i], g.length, held[i]);
+                assert_eq!(trial[i], p.history.delta_max);
+            }
+            let s = slope(Some(&held));
+            assert!(s < 2.0 * r.stiffness.norm(), "held {held:?}: slope {s:e}");
+        }
+        let s = slope(None);
+        assert!(
+            s > 1e3 * r.stiffness.norm(),
+            "read from the gap: slope {s:e}"
+        );
     }
 
     #[test]

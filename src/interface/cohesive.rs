@@ -54,11 +54,33 @@
 //! i.e. the potential `phi(sqrt(beta^2 ds^2 + <dn>^2)) + k_p <-dn>^2 / 2`: the traction is
 //! continuous at `delta_n = 0` and the tangent symmetric.
 //!
-//! **Why the option exists.** The paper's law is discontinuous in `t_s` at `delta_n = 0`:
-//! just open, `t_s = k beta^2 delta_s` with the (possibly damaged) cohesive secant `k`; just
-//! closed, `t_s = k_p delta_s`. On paths that close some ITZ points while sliding them, e.g.
-//! a uniaxial macro stress with its Poisson contraction, the discrete equilibrium can then
-//! have no solution near the switch (measured in `docs/robustness.md`).
+//! **The shear jump at closure.** The paper's law is discontinuous in `t_s` at
+//! `delta_n = 0`: just open, `t_s = k beta^2 delta_s` with the (possibly damaged) cohesive
+//! secant `k`; just closed, `t_s = k_p delta_s`. With the contact status read from the gap
+//! at every evaluation, paths that close ITZ points while sliding them (a uniaxial macro
+//! stress with its Poisson contraction, the snap after the peak) can leave the discrete RVE
+//! without any equilibrium: a point held open closes, held closed it opens
+//! (`docs/contact-algorithm.md`). The solver therefore holds the status within a Newton
+//! iteration (`solver.contact_status = "active_set"`), evaluating the law with
+//! [`CohesiveLaw::evaluate_as`]; [`ContactShear::Cohesive`] is continuous at closure and
+//! needs no held status.
+//!
+//! # Held contact status
+//!
+//! [`CohesiveLaw::evaluate_as`] takes the status as given. Where it agrees with the gap it
+//! is [`CohesiveLaw::evaluate`]. Where it does not, the branch of the status is extended:
+//! * held closed with an open gap (`delta_n >= 0`): the contact branch (with
+//!   [`ContactShear::Penalty`] eq. 47 on both components; the normal traction is then a
+//!   tension `k_p delta_n`);
+//! * held open with a closed gap (`delta_n < 0`): the normal penalty and the cohesive law
+//!   of the sliding alone, `t_s = k(beta |delta_s|) beta^2 delta_s`, `t_n = k_p delta_n`
+//!   (the contact branch of [`ContactShear::Cohesive`]): interpenetration is always
+//!   penalized and compression never advances the history. Its branch is that of the
+//!   sliding (loading or unloading), since the point is open.
+//!
+//! Both come from a potential, so the tangent stays symmetric, and with the status held
+//! the traction is continuous in the jump (with a kink of the normal stiffness at
+//! `delta_n = 0`).
 //!
 //! The loading secant and tangent derive from the potential `phi(delta)` with
 //! `dphi/d delta = t(delta)`, so `C` is symmetric in every branch.
@@ -179,6 +201,9 @@ pub struct CohesivePoint {
     /// The cohesive secant `k = t/delta` at `opening` (eqs. 32-35); the penalty `k_p` at a
     /// closed point with [`ContactShear::Penalty`].
     pub secant: f64,
+    /// Whether the normal traction is the penalty's `k_p delta_n` (a closed gap, or a
+    /// point held closed).
+    pub penalty_normal: bool,
 }
 
 impl Penalty {
@@ -240,6 +265,9 @@ impl CohesiveLaw {
     pub fn secant_matrix(&self, point: &CohesivePoint) -> Matrix2<f64> {
         let shear = point.secant * self.beta * self.beta;
         match (point.branch, self.contact_shear) {
+            (Branch::Loading, _) if point.penalty_normal => {
+                Matrix2::new(shear, 0.0, 0.0, point.tangent[(1, 1)])
+            }
             (Branch::Loading, _) => Matrix2::new(shear, 0.0, 0.0, point.secant),
             (Branch::Contact, ContactShear::Cohesive) => {
                 Matrix2::new(shear, 0.0, 0.0, point.tangent[(1, 1)])
@@ -258,31 +286,62 @@ impl CohesiveLaw {
         jump: [f64; 2],
         length: f64,
     ) -> CohesivePoint {
+        self.evaluate_as(history, jump, length, self.is_closed(jump))
+    }
+
+    /// The contact status the gap of `jump` gives: closed iff contact is on and
+    /// `delta_n < 0` (`delta_n == 0` and `-0.0` count as open).
+    #[inline]
+    pub fn is_closed(&self, jump: [f64; 2]) -> bool {
+        self.contact && jump[1] < 0.0
+    }
+
+    /// [`CohesiveLaw::evaluate`] with the contact status held at `closed` instead of read
+    /// from the gap of `jump` (see "Held contact status" in the module docs). Contact
+    /// off: `closed` is ignored.
+    pub fn evaluate_as(
+        &self,
+        history: &CohesiveHistory,
+        jump: [f64; 2],
+        length: f64,
+        closed: bool,
+    ) -> CohesivePoint {
         let [ds, dn] = jump;
-        if self.contact && dn < 0.0 {
+        if !self.contact || !(closed || dn < 0.0) {
+            return self.open(history, ds, dn);
+        }
+        let kp = self.contact_stiffness(length);
+        if closed && self.contact_shear == ContactShear::Penalty {
             // Eqs. 36-37 and 47.
-            let kp = self.contact_stiffness(length);
-            return match self.contact_shear {
-                ContactShear::Penalty => CohesivePoint {
-                    traction: Vector2::new(kp * ds, kp * dn),
-                    tangent: Matrix2::from_diagonal_element(kp),
-                    history: *history,
-                    branch: Branch::Contact,
-                    opening: (self.beta * ds).hypot(dn),
-                    secant: kp,
-                },
-                ContactShear::Cohesive => {
-                    // The cohesive law of the sliding alone (at delta_n = 0 its
-                    // off-diagonal tangent terms vanish), plus the normal penalty.
-                    let mut point = self.open(history, ds, 0.0);
-                    point.traction.y = kp * dn;
-                    point.tangent[(1, 1)] = kp;
-                    point.branch = Branch::Contact;
-                    point
-                }
+            return CohesivePoint {
+                traction: Vector2::new(kp * ds, kp * dn),
+                tangent: Matrix2::from_diagonal_element(kp),
+                history: *history,
+                branch: Branch::Contact,
+                opening: (self.beta * ds).hypot(dn),
+                secant: kp,
+                penalty_normal: true,
             };
         }
-        self.open(history, ds, dn)
+        // The cohesive law of the sliding alone (at delta_n = 0 its off-diagonal tangent
+        // terms vanish), plus the normal penalty: a closed point of ContactShear::Cohesive,
+        // or a point held open whose gap has closed.
+        let mut point = self.open(history, ds, 0.0);
+        point.traction.y = kp * dn;
+        point.tangent[(1, 1)] = kp;
+        point.penalty_normal = true;
+        if closed {
+            point.branch = Branch::Contact;
+        }
+        point
+    }
+
+    /// Whether holding the contact status changes anything: contact on with
+    /// [`ContactShear::Penalty`], whose shear traction jumps at closure. With
+    /// [`ContactShear::Cohesive`] the traction is continuous at closure.
+    #[inline]
+    pub fn holds_contact_status(&self) -> bool {
+        self.contact && self.contact_shear == ContactShear::Penalty
     }
 
     /// The cohesive law of an open (or, with contact off, any) point: loading on the
@@ -310,6 +369,7 @@ impl CohesiveLaw {
                 branch: Branch::Loading,
                 opening,
                 secant: k,
+                penalty_normal: false,
             }
         } else {
             // Unloading/reloading to the origin, eqs. 24, 34-35, tangent eq. 46.
@@ -321,6 +381,7 @@ impl CohesiveLaw {
                 branch: Branch::Unloading,
                 opening,
                 secant: k,
+                penalty_normal: false,
             }
         }
     }
@@ -341,10 +402,30 @@ impl InterfaceLaw for CohesiveLaw {
         length: f64,
         kind: TangentKind,
     ) -> LawPoint {
+        self.respond_as(committed, trial, jump, length, kind, self.is_closed(jump))
+    }
+
+    fn has_contact_status(&self) -> bool {
+        self.holds_contact_status()
+    }
+
+    fn is_closed(&self, jump: [f64; 2]) -> bool {
+        CohesiveLaw::is_closed(self, jump)
+    }
+
+    fn respond_as(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        length: f64,
+        kind: TangentKind,
+        closed: bool,
+    ) -> LawPoint {
         let history = CohesiveHistory {
             delta_max: committed[0],
         };
-        let point = self.evaluate(&history, jump, length);
+        let point = self.evaluate_as(&history, jump, length, closed);
         trial[0] = point.history.delta_max;
         LawPoint {
             traction: point.traction,
@@ -386,19 +467,20 @@ impl InterfaceLaw for CohesiveLaw {
         })
     }
 
-    /// With the paper's contact law, closed points that slide can leave the RVE without
-    /// equilibrium (see the module docs); the message names the remedy.
+    /// With the paper's contact law read from the gap at every evaluation, closed points
+    /// that slide can leave the RVE without equilibrium (see the module docs); the message
+    /// names the remedy. (The solver asks only when it did not hold the status.)
     fn failure_hint(&self, closed_points: usize) -> Option<String> {
-        (self.contact && self.contact_shear == ContactShear::Penalty && closed_points > 0).then(
-            || {
-                format!(
+        (self.holds_contact_status() && closed_points > 0).then(|| {
+            format!(
                 "; {closed_points} ITZ points are closed at the last iterate: with the paper's \
-                 contact law (materials.itz.contact_shear = \"penalty\") the shear traction \
+                 contact law (materials.itz.contact_shear = \"penalty\") read at every \
+                 iteration (solver.contact_status = \"per_iteration\") the shear traction \
                  jumps at closure and sliding closed points can leave the RVE without \
-                 equilibrium; contact_shear = \"cohesive\" keeps it continuous"
+                 equilibrium; solver.contact_status = \"active_set\" (the default) holds \
+                 the status within a Newton iteration"
             )
-            },
-        )
+        })
     }
 }
 
@@ -592,6 +674,109 @@ mod tests {
                         < 1e-9 * expected.abs()
                 );
             }
+        }
+    }
+
+    /// `evaluate_as` with the status the gap gives is `evaluate`, bit for bit, on every
+    /// branch and both contact shears.
+    #[test]
+    fn held_status_matching_the_gap_is_evaluate() {
+        for shear in [ContactShear::Penalty, ContactShear::Cohesive] {
+            let l = CohesiveLaw {
+                contact_shear: shear,
+                ..law(true)
+            };
+            for h in [CohesiveHistory::default(), loaded_to(1.5 * DC)] {
+                for jump in [
+                    [0.3 * DC, 0.4 * DC],
+                    [3.0 * DC, 0.2 * DC],
+                    [0.2 * DC, -0.1 * DC],
+                    [-2.5 * DC, -0.3 * DC],
+                    [0.1 * DC, 0.0],
+                    [0.1 * DC, -0.0],
+                ] {
+                    let p = l.evaluate(&h, jump, LEN);
+                    assert_eq!(l.evaluate_as(&h, jump, LEN, l.is_closed(jump)), p);
+                    assert_eq!(l.is_closed(jump), p.branch == Branch::Contact);
+                }
+            }
+        }
+        assert!(!law(false).is_closed([0.0, -DC]));
+        assert!(law(true).holds_contact_status());
+        assert!(!law(false).holds_contact_status());
+        let cohesive = CohesiveLaw {
+            contact_shear: ContactShear::Cohesive,
+            ..law(true)
+        };
+        assert!(!cohesive.holds_contact_status());
+    }
+
+    /// The paper's law held closed with an open gap: the penalty on both components (the
+    /// normal one tensile), history frozen; held open with a closed gap: the normal
+    /// penalty and the cohesive law of the sliding, on the sliding's branch, whose history
+    /// advances with the sliding only (compression does not damage). Exact symmetric
+    /// tangents; the secant matrix keeps the normal penalty.
+    #[test]
+    fn held_status_against_the_gap() {
+        let l = law(true);
+        let kp = l.contact_stiffness(LEN);
+        for h in [CohesiveHistory::default(), loaded_to(1.5 * DC)] {
+            let jump = [0.4 * DC, 0.2 * DC];
+            let p = l.evaluate_as(&h, jump, LEN, true);
+            assert_eq!(p.branch, Branch::Contact);
+            assert!(p.penalty_normal);
+            assert_eq!(p.traction, Vector2::new(kp * jump[0], kp * jump[1]));
+            assert_eq!(p.tangent, Matrix2::from_diagonal_element(kp));
+            assert_eq!(p.history, h);
+
+            for (jump, loads) in [
+                ([0.4 * DC, -0.2 * DC], false),
+                ([3.0 * DC, -0.2 * DC], true),
+            ] {
+                let p = l.evaluate_as(&h, jump, LEN, false);
+                let sliding = l.evaluate(&h, [jump[0], 0.0], LEN);
+                assert_eq!(p.branch, sliding.branch);
+                assert!(p.penalty_normal);
+                assert_eq!(p.traction.x, sliding.traction.x);
+                assert_eq!(p.traction.y, kp * jump[1]);
+                assert!((p.opening - l.beta * jump[0].abs()).abs() < 1e-18);
+                let virgin_loads = h.delta_max == 0.0 || loads;
+                if virgin_loads {
+                    assert_eq!(p.history.delta_max, p.opening);
+                } else {
+                    assert_eq!(p.history, h);
+                }
+                // FD of the held law (the status does not follow the perturbed gap).
+                let mut fd = Matrix2::zeros();
+                let step = 1e-6 * DC;
+                for j in 0..2 {
+                    let (mut jp, mut jm) = (jump, jump);
+                    jp[j] += step;
+                    jm[j] -= step;
+                    let tp = l.evaluate_as(&h, jp, LEN, false).traction;
+                    let tm = l.evaluate_as(&h, jm, LEN, false).traction;
+                    fd.set_column(j, &((tp - tm) / (2.0 * step)));
+                }
+                assert!((p.tangent - fd).norm() < 1e-6 * p.tangent.norm());
+                assert_eq!(p.tangent, p.tangent.transpose());
+                let secant = l.secant_matrix(&p);
+                assert_eq!(secant[(1, 1)], kp);
+            }
+        }
+    }
+
+    /// With the status held, the traction is continuous across `delta_n = 0` (for either
+    /// status), where the status read from the gap jumps in shear.
+    #[test]
+    fn held_status_is_continuous_at_closure() {
+        let l = law(true);
+        let damaged = loaded_to(1.5 * DC);
+        let (ds, tiny) = (0.5 * DC, 1e-12 * DC);
+        for closed in [false, true] {
+            let open = l.evaluate_as(&damaged, [ds, tiny], LEN, closed);
+            let shut = l.evaluate_as(&damaged, [ds, -tiny], LEN, closed);
+            let jump = (open.traction - shut.traction).norm() / open.traction.norm();
+            assert!(jump < 1e-6, "held {closed}: jump {jump:e}");
         }
     }
 

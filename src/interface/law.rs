@@ -71,6 +71,36 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         kind: TangentKind,
     ) -> LawPoint;
 
+    /// Whether the law switches a point between two laws by the sign of its gap (the
+    /// paper's contact: closed iff `delta_n < 0`) with a traction that jumps at the
+    /// switch, so that the solver holds that *contact status* within a Newton iteration
+    /// and reads it again between iterations (`solver::contact`). `false`: the status is
+    /// never held and [`InterfaceLaw::respond_as`] is [`InterfaceLaw::respond`].
+    fn has_contact_status(&self) -> bool {
+        false
+    }
+
+    /// The contact status the gap of `jump` gives: `true` for closed.
+    fn is_closed(&self, _jump: [f64; 2]) -> bool {
+        false
+    }
+
+    /// [`InterfaceLaw::respond`] with the contact status held at `closed` instead of read
+    /// from the gap of `jump`; the same as `respond` where `closed == is_closed(jump)`.
+    /// With the status held, the traction must be continuous in the jump and the matrix
+    /// symmetric.
+    fn respond_as(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        length: f64,
+        kind: TangentKind,
+        _closed: bool,
+    ) -> LawPoint {
+        self.respond(committed, trial, jump, length, kind)
+    }
+
     /// Whether a point whose history goes from `start` to `trial` within a step passes
     /// the peak of its strength there: the solver then refuses the tangent predictor,
     /// which would carry it past a limit point of the RVE on the pre-peak branch.

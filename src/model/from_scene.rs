@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use crate::constraint::BoundaryCondition;
 use crate::interface::{CohesiveLaw, InterfaceLaw, LinearInterface, Penalty};
-use crate::scene::{BoundaryKind, ItzSpec, SceneSpec, SolverSpec};
-use crate::solver::Settings;
+use crate::scene::{BoundaryKind, ContactStatusSpec, ItzSpec, SceneSpec, SolverSpec};
+use crate::solver::{ContactStatus, Settings};
 
 /// The solver settings of `[solver]`.
 pub fn solver_settings(spec: &SolverSpec) -> Settings {
@@ -20,6 +20,10 @@ pub fn solver_settings(spec: &SolverSpec) -> Settings {
         max_secant_iterations: spec.max_secant_iterations,
         reuse_factorization: spec.reuse_factorization,
         second_order_predictor: spec.second_order_predictor,
+        contact_status: match spec.contact_status {
+            ContactStatusSpec::ActiveSet => ContactStatus::ActiveSet,
+            ContactStatusSpec::PerIteration => ContactStatus::PerIteration,
+        },
     }
 }
 

@@ -12,8 +12,8 @@ pub use crate::geometry::{Explicit, ExplicitInclusion, Orientation, RandomSpec, 
 pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
 pub use path::{path_points, MAX_STRAIN};
 pub use schema::{
-    BoundaryKind, BoundarySpec, CellSpec, EffectsSpec, ElasticSpec, GeometrySpec, GmshSpec,
-    InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec, MeshSpec, PathSegment,
-    PenaltySpec, SceneSpec, SolverSpec, StraightInterfaceSpec,
+    BoundaryKind, BoundarySpec, CellSpec, ContactStatusSpec, EffectsSpec, ElasticSpec,
+    GeometrySpec, GmshSpec, InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec,
+    MeshSpec, PathSegment, PenaltySpec, SceneSpec, SolverSpec, StraightInterfaceSpec,
 };
 pub use validate::{MAX_PATH_INCREMENTS, MAX_TRIANGLES};

@@ -279,6 +279,27 @@ pub struct SolverSpec {
     /// predicts to first order only (`x_n + X_n Delta eps`) and keeps no curvature.
     #[serde(default = "yes")]
     pub second_order_predictor: bool,
+    /// When the contact status of an ITZ point (closed iff its normal jump is negative,
+    /// eqs. 36-37) is read: `"active_set"` (default) or `"per_iteration"`, see
+    /// [`ContactStatusSpec`] and `docs/contact-algorithm.md`.
+    #[serde(default)]
+    pub contact_status: ContactStatusSpec,
+}
+
+/// `solver.contact_status`: when the solver reads the contact status of the ITZ points
+/// from their gaps. Matters only with the paper's contact law
+/// (`materials.itz.contact_shear = "penalty"`), whose shear traction jumps at closure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactStatusSpec {
+    /// Held within each Newton iteration and read again between iterations; a point may
+    /// switch at most twice per Newton loop, then keeps its status (an active-set
+    /// strategy).
+    #[default]
+    ActiveSet,
+    /// Read from the gap at every evaluation of the law. The residual then jumps where a
+    /// sliding point closes, and some paths have no equilibrium at all.
+    PerIteration,
 }
 
 impl Default for SolverSpec {
@@ -292,6 +313,7 @@ impl Default for SolverSpec {
             max_secant_iterations: default_secant_iterations(),
             reuse_factorization: true,
             second_order_predictor: true,
+            contact_status: ContactStatusSpec::ActiveSet,
         }
     }
 }

@@ -29,6 +29,7 @@
 //! tracer gives up after [`MAX_CUTS`] failures in a row. A trace has no budget on its
 //! total iterations: where an increment lands matters more to a host than what it costs.
 
+use super::contact;
 use super::newton::{newton, Mode};
 use super::problem::{dot, Problem, Strain};
 use super::settings::Settings;
@@ -121,6 +122,7 @@ pub(super) fn trace(
     let mut direction_ready = false;
     for _ in 0..MAX_POINTS {
         ws.history_start.copy_from_slice(&trial.history);
+        contact::hold_start(problem, &trial.unknowns, ws);
         ws.trace.xa.copy_from_slice(&trial.unknowns);
         if !direction_ready && !tangent_at(problem, &line.at(t_a), trial, ws) {
             return false;

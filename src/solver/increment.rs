@@ -25,6 +25,7 @@
 //! is that of the last sub-step.
 
 use super::arclength::{trace, StrainLine, Traced};
+use super::contact;
 use super::newton::{newton, Failure, Mode};
 use super::predictor::{predict, store_curvature, Prediction, StrainStep};
 use super::problem::{sensitivity_times, Problem, Strain};
@@ -97,6 +98,7 @@ pub fn solve_increment(
     let numeric = ws.factorization.numeric();
     let before = (numeric.count, numeric.lu_count, numeric.lblt_count);
     trial.copy_from(committed);
+    contact::configure(problem, ws);
     if problem.n() == 0
         || (problem.disc.interfaces.is_empty() && problem.predictor.len() == 3 * problem.n())
     {
@@ -126,6 +128,7 @@ pub fn solve_increment(
     let counts = ws.current.counts;
     (report.loading, report.unloading, report.contact) =
         (counts.loading, counts.unloading, counts.contact);
+    report.held_points = contact::held_against_gap(problem, &trial.unknowns, ws);
     let mut solved = [0.0; 9];
     if request == TangentRequest::Consistent {
         solved = condensed_tangent(problem, ws)?;
@@ -208,6 +211,7 @@ impl Increment<'_, '_> {
             };
             ws.substep_start.copy_from(trial);
             ws.history_start.copy_from_slice(&trial.history);
+            contact::hold_start(self.problem, &trial.unknowns, ws);
             match self.solve_substep(&sub, trial, ws) {
                 Ok(iterations) => {
                     self.report.iterations += iterations;
@@ -342,6 +346,7 @@ impl Increment<'_, '_> {
             }
             Remedy::SecantIterations => {
                 ws.history_start.copy_from_slice(&trial.history);
+                contact::hold_start(problem, &trial.unknowns, ws);
                 newton(
                     problem,
                     &settings,
@@ -357,11 +362,15 @@ impl Increment<'_, '_> {
 }
 
 /// On a final failure: what the interface law has to say about the last iterate (for the
-/// paper's contact law, that closed points can leave the RVE without equilibrium).
+/// paper's contact law read at every evaluation, that closed points can leave the RVE
+/// without equilibrium; with the status held that does not apply).
 fn failure_hint(problem: &Problem, target: &Strain, trial: &State, ws: &mut Workspace) -> String {
     let Some(law) = problem.disc.law.as_deref() else {
         return String::new();
     };
+    if contact::held(ws) {
+        return String::new();
+    }
     if trial.unknowns.iter().any(|v| !v.is_finite()) {
         return String::new();
     }

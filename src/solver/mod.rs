@@ -5,9 +5,11 @@
 //! buffer, so a solve allocates nothing.
 //!
 //! Dependencies inside: `increment -> {predictor, newton, arclength, tangent}`,
-//! `arclength -> newton`, and all of them `-> problem -> {linear, workspace, settings}`.
+//! `arclength -> newton`, all of them `-> contact -> problem -> {linear, workspace,
+//! settings}`.
 
 mod arclength;
+mod contact;
 mod increment;
 mod linear;
 mod newton;
@@ -20,5 +22,5 @@ mod workspace;
 pub use increment::{solve_increment, Solved};
 pub use linear::{FactorKind, LinearSolver, NumericFactor};
 pub use problem::{Problem, Strain};
-pub use settings::{IncrementReport, Settings, TangentRequest};
+pub use settings::{ContactStatus, IncrementReport, Settings, TangentRequest};
 pub use workspace::{Factorization, Workspace};

@@ -13,7 +13,9 @@
 //!
 //! # Chord corrections
 //! A Newton correction that cuts the residual at least a hundredfold
-//! ([`CHORD_CONTRACTION`]) shows that the tangent barely changed over the step; the next
+//! ([`CHORD_CONTRACTION`]) with every interface point on the branch (and contact status)
+//! it had at the factorization shows that the tangent barely changed over the step; the
+//! next
 //! correction then reuses the factorization (a chord or modified-Newton step, contracting
 //! by the relative change of the tangent) instead of factorizing the new tangent.
 //! `Settings::reuse_factorization = false` gives plain Newton and its quadratic rate.
@@ -27,7 +29,12 @@
 //! [`SECANT_HANDOVER`] times the tolerance the loop switches to consistent Newton for the
 //! final quadratic convergence (and back to secant if Newton makes the residual grow
 //! tenfold). The converged state satisfies the same equations; only the path differs.
+//!
+//! # Contact status
+//! With a law that has a contact status, the status is held within each iteration and
+//! read again at the first iterate and after each accepted one (see `contact`).
 
+use super::contact;
 use super::problem::{accept_candidate, norm, Problem, Strain};
 use super::settings::Settings;
 use super::workspace::Workspace;
@@ -115,12 +122,21 @@ pub(super) fn newton(
     ws.factorization.invalidate();
     ws.residuals.clear();
     ws.branch_signatures.clear();
+    if !evaluated {
+        contact::restore(ws);
+    }
     if !(evaluated && kind == TangentKind::Consistent) {
+        problem.evaluate(x, strain, kind, ws);
+    }
+    // The contact status of the first iteration (see `contact`).
+    if contact::update(problem, x, ws) > 0 {
         problem.evaluate(x, strain, kind, ws);
     }
     let mut rnorm = norm(&ws.current.r);
     let mut iteration = 0u32;
     let mut chord = false;
+    // The interface branches of the iterate whose tangent is factorized.
+    let mut factored_branches = 0u64;
     loop {
         if ws.residuals.len() < ws.residuals.capacity() {
             ws.residuals.push(rnorm / reference);
@@ -144,7 +160,9 @@ pub(super) fn newton(
                 reference,
             });
         }
-        correction(problem, kind, chord, ws)?;
+        if correction(problem, kind, chord, ws)? {
+            factored_branches = ws.current.counts.branch_signature;
+        }
         iteration += 1;
         let new_norm = if kind == TangentKind::Consistent {
             line_search(problem, strain, x, rnorm, settings.line_search, ws)
@@ -154,6 +172,13 @@ pub(super) fn newton(
         };
         x.copy_from_slice(&ws.x_try);
         accept_candidate(ws);
+        // The contact status of the next iteration.
+        let new_norm = if contact::update(problem, x, ws) > 0 {
+            problem.evaluate(x, strain, kind, ws);
+            norm(&ws.current.r)
+        } else {
+            new_norm
+        };
         if mode == Mode::SecantThenNewton {
             let wanted = if new_norm <= SECANT_HANDOVER * tolerance {
                 TangentKind::Consistent
@@ -167,11 +192,13 @@ pub(super) fn newton(
                 problem.evaluate(x, strain, kind, ws);
             }
         }
-        // A correction that contracted the residual this much leaves the tangent almost
-        // unchanged: the next one reuses the factorization.
+        // A correction that contracted the residual this much, with no interface point
+        // changing branch since the factorization, leaves the tangent almost unchanged:
+        // the next one reuses the factorization.
         chord = settings.reuse_factorization
             && kind == TangentKind::Consistent
-            && new_norm <= CHORD_CONTRACTION * rnorm;
+            && new_norm <= CHORD_CONTRACTION * rnorm
+            && ws.current.counts.branch_signature == factored_branches;
         rnorm = new_norm;
     }
 }
@@ -187,13 +214,13 @@ fn stagnant(ws: &Workspace) -> bool {
 /// consistent factorization solves `[-R | G]` in one 4-column solve, so that an increment
 /// ending on it (a chord step follows) starts its tangent from `K_f^-1 G` (see
 /// `tangent`); done whether or not the tangent is wanted, so that the correction, and with
-/// it the stress, has the same bits either way.
+/// it the stress, has the same bits either way. Returns whether it factorized.
 fn correction(
     problem: &Problem,
     kind: TangentKind,
     chord: bool,
     ws: &mut Workspace,
-) -> Result<(), Failure> {
+) -> Result<bool, Failure> {
     let fresh = !(chord && ws.factorization.is_reusable());
     if fresh {
         problem
@@ -218,7 +245,7 @@ fn correction(
     if ws.dx.iter().any(|d| !d.is_finite()) {
         return Err(Failure::Singular("non-finite Newton correction".into()));
     }
-    Ok(())
+    Ok(fresh)
 }
 
 /// Backtracking on `||R||` along `ws.dx`: `alpha = 1, 1/2, ..., 1/32`, keeping the best;

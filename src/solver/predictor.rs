@@ -16,6 +16,7 @@
 //! [`take_prediction`]); otherwise the model's elastic sensitivity `X_el` is tried.
 //! Measurements of the predictors are in `docs/accuracy.md` and `docs/robustness.md`.
 
+use super::contact;
 use super::problem::{accept_candidate, norm, sensitivity_times, Problem, Strain};
 use super::workspace::Workspace;
 use crate::interface::TangentKind;
@@ -83,6 +84,7 @@ pub(super) fn predict(
     ws: &mut Workspace,
 ) -> Prediction {
     let (from, d) = (step.from, step.delta());
+    contact::restore(ws);
     let outward = from[0] * d[0] + from[1] * d[1] + from[2] * d[2] >= 0.0;
     if !outward {
         return Prediction::None;

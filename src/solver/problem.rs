@@ -51,12 +51,14 @@ impl Problem<'_> {
     }
 
     /// Evaluates `R` and `K` (of `kind`) at `x` into `out`, from the sub-step's start
-    /// history `start`.
+    /// history `start`, with the contact status `status` held (or read from the gaps,
+    /// `None`; see `contact`).
     pub(super) fn evaluate_into(
         &self,
         x: &[f64],
         strain: &Strain,
         start: &[f64],
+        status: Option<&[bool]>,
         kind: TangentKind,
         out: &mut Evaluation,
     ) {
@@ -68,6 +70,7 @@ impl Problem<'_> {
             &mut out.r,
             Some(&mut out.k),
             kind,
+            status,
         );
     }
 
@@ -79,7 +82,8 @@ impl Problem<'_> {
         kind: TangentKind,
         ws: &mut Workspace,
     ) {
-        self.evaluate_into(x, strain, &ws.history_start, kind, &mut ws.current);
+        let status = ws.contact.status();
+        self.evaluate_into(x, strain, &ws.history_start, status, kind, &mut ws.current);
     }
 
     /// Evaluates `R` and `K` at `ws.x_try` as the candidate evaluation.
@@ -93,6 +97,7 @@ impl Problem<'_> {
             &ws.x_try,
             strain,
             &ws.history_start,
+            ws.contact.status(),
             kind,
             &mut ws.candidate,
         );

@@ -21,6 +21,20 @@ pub struct Settings {
     pub reuse_factorization: bool,
     /// The second-order term of the predictor (see `predictor`).
     pub second_order_predictor: bool,
+    /// When the contact status of the interface points is read (see `contact`).
+    pub contact_status: ContactStatus,
+}
+
+/// When the solver reads the contact status of the interface points from their gaps
+/// (laws with [`crate::interface::InterfaceLaw::has_contact_status`]; see `contact`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ContactStatus {
+    /// Held within each Newton iteration, read again between iterations, at most
+    /// [`super::contact::MAX_SWITCHES`] switches per point and Newton loop.
+    #[default]
+    ActiveSet,
+    /// Read at every evaluation of the law.
+    PerIteration,
 }
 
 /// What tangent the caller wants back.
@@ -57,4 +71,8 @@ pub struct IncrementReport {
     pub loading: usize,
     pub unloading: usize,
     pub contact: usize,
+    /// Interface points held at the end at a contact status their gap contradicts (see
+    /// `contact`): 0 means the converged state is an equilibrium of the law with the
+    /// status read from the gaps.
+    pub held_points: usize,
 }

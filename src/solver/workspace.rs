@@ -176,6 +176,25 @@ pub(super) struct TraceBuffers {
     pub pred: Vec<f64>,
 }
 
+/// The contact status of the interface points within a Newton loop (see `contact`).
+pub(super) struct ContactBuffers {
+    /// Whether the status is held in this update at all.
+    pub held: bool,
+    /// The status at the loop's start state, the status held now, how many times each
+    /// point has switched in this loop, and scratch for the status the gaps give.
+    pub start: Vec<bool>,
+    pub now: Vec<bool>,
+    pub switches: Vec<u8>,
+    pub read: Vec<bool>,
+}
+
+impl ContactBuffers {
+    /// The status to evaluate with: the held one, or `None` (read from the gaps).
+    pub fn status(&self) -> Option<&[bool]> {
+        self.held.then_some(self.now.as_slice())
+    }
+}
+
 /// Per-thread scratch for the updates of one model (`Model::update`).
 pub struct Workspace {
     /// The evaluation at the current iterate, and a candidate (line search, predictor).
@@ -195,6 +214,7 @@ pub struct Workspace {
     /// State at the start of the current sub-step (for sub-stepping).
     pub(super) substep_start: State,
     pub(super) trace: TraceBuffers,
+    pub(super) contact: ContactBuffers,
     /// Relative residual norms of the last Newton loop, and the interface branch signature
     /// ([`SystemEvaluation::branch_signature`]) of each of those iterates: where two
     /// successive ones agree, no point changed branch and the correction between them is
@@ -235,6 +255,13 @@ impl Workspace {
                 prev: zeros(),
                 pred: zeros(),
             },
+            contact: ContactBuffers {
+                held: false,
+                start: vec![false; disc.interface_points()],
+                now: vec![false; disc.interface_points()],
+                switches: vec![0; disc.interface_points()],
+                read: vec![false; disc.interface_points()],
+            },
             residuals: Vec::with_capacity(max_iterations + 2),
             branch_signatures: Vec::with_capacity(max_iterations + 2),
             model_id,
@@ -249,6 +276,20 @@ impl Workspace {
     /// Relative residual norms of the last Newton loop (convergence studies).
     pub fn residual_history(&self) -> &[f64] {
         &self.residuals
+    }
+
+    /// The contact status of the interface points held at the end of the last Newton loop
+    /// (one entry per point, element-major), or `None` when the last update did not hold
+    /// it (see `solver.contact_status`). Where it differs from the status the converged
+    /// gaps give, a point was held against its gap (convergence studies).
+    pub fn held_contact_status(&self) -> Option<&[bool]> {
+        self.contact.status()
+    }
+
+    /// The interface history the last Newton loop started from (the last sub-step's or arc
+    /// point's; convergence studies).
+    pub fn history_start(&self) -> &[f64] {
+        &self.history_start
     }
 
     /// Branch signatures of the iterates of the last Newton loop.

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod hard_paths;
+
 use std::path::{Path, PathBuf};
 
 use rve::scene::Scene;
