@@ -246,6 +246,19 @@ impl Discretization {
         count
     }
 
+    /// Calls `f(point, [delta_s, delta_n])` with the local jump of every interface point at
+    /// the unknowns `x` (points element-major, as in a contact status). Allocates nothing.
+    pub fn for_each_jump(&self, x: &[f64], mut f: impl FnMut(usize, [f64; 2])) {
+        let np = self.points_per_interface();
+        for (e, (geometry, dofs)) in self.interfaces.iter().zip(&self.interface_dofs).enumerate() {
+            let u = Self::gather(x, dofs);
+            let jumps = interface4::local_jumps(geometry, self.quadrature, &u);
+            for (p, &jump) in jumps[..np].iter().enumerate() {
+                f(e * np + p, jump);
+            }
+        }
+    }
+
     /// Number of interface quadrature points (entries of a contact status).
     pub fn interface_points(&self) -> usize {
         self.interfaces.len() * self.points_per_interface()

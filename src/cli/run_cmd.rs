@@ -69,7 +69,7 @@ fn parse_frames(s: &str) -> std::result::Result<Frames, String> {
 }
 
 /// Header of `response.csv`; the C driver writes the same columns.
-pub const CSV_HEADER: &str = "step,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy,D11,D12,D13,D21,D22,D23,D31,D32,D33,iterations,substeps,s_zz,factorizations,loading_points,unloading_points,contact_points,seconds,limit_points,held_points";
+pub const CSV_HEADER: &str = "step,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy,D11,D12,D13,D21,D22,D23,D31,D32,D33,iterations,substeps,s_zz,factorizations,loading_points,unloading_points,contact_points,seconds,limit_points,held_points,fast";
 
 pub fn run(args: &RunArgs) -> Result<()> {
     let (scene, name) = load_scene(args.scene.as_ref())?;
@@ -141,12 +141,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let d = r.tangent;
         writeln!(
             csv,
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:e},{},{},{},{},{:e},{},{}",
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:e},{},{},{},{},{:e},{},{},{}",
             step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
             d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8],
             r.report.iterations, r.report.substeps, r.s_zz, r.report.factorizations,
             r.report.loading, r.report.unloading, r.report.contact, seconds,
-            r.report.limit_points, r.report.held_points
+            r.report.limit_points, r.report.held_points, u8::from(r.report.answer.is_fast())
         )
         .map_err(io_err)?;
         if let Some(dir) = &args.vtk {
@@ -235,7 +235,7 @@ fn write_frame(
     step: usize,
     state: &rve::State,
 ) -> Result<()> {
-    let fields = model.fields(state);
+    let fields = model.fields(state)?;
     let e = state.strain;
     let caption = format!(
         "increment {step}, strain [{:.3e} {:.3e} {:.3e}]",

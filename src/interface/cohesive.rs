@@ -442,6 +442,29 @@ impl InterfaceLaw for CohesiveLaw {
         trial[0] >= self.delta_c && start[0] < self.delta_c
     }
 
+    /// The linear branches of the law are unloading to the origin (eq. 24: an open point
+    /// with `delta < delta_max`) and contact (eqs. 36-37: a closed point; with
+    /// [`ContactShear::Cohesive`] also `beta |delta_s| < delta_max`, the sliding
+    /// unloading). Every jump within `error` of `jump` must give the same status as
+    /// `closed` (`delta_n < 0` closed, `delta_n >= 0` open) and a strictly smaller effective
+    /// opening than `delta_max`: the loading test `delta >= delta_max` is never met.
+    fn stays_linear(&self, history: &[f64], jump: [f64; 2], error: [f64; 2], closed: bool) -> bool {
+        let delta_max = history[0];
+        let [ds, dn] = jump;
+        let [es, en] = error;
+        let sliding = self.beta * (ds.abs() + es);
+        let unloading = sliding.hypot(dn.abs() + en) < delta_max;
+        if !self.contact {
+            return unloading;
+        }
+        if closed {
+            dn + en < 0.0
+                && (self.contact_shear == ContactShear::Penalty || sliding < delta_max)
+        } else {
+            dn - en >= 0.0 && unloading
+        }
+    }
+
     /// `delta_max` is a non-negative opening.
     fn history_is_valid(&self, history: &[f64]) -> bool {
         history.iter().all(|d| d.is_finite() && *d >= 0.0)

@@ -108,6 +108,16 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         false
     }
 
+    /// Whether every jump within `error` (a bound per component) of `jump` keeps the point
+    /// on a *linear branch through the origin* with its history unchanged, and on the
+    /// contact status `closed`: then the point's traction is `S delta` with a fixed matrix
+    /// `S`, and an RVE whose points all stay so is linear in the macro strain (the fast
+    /// path of `solver::fast_path`). `false` when in doubt; the default (a law that does
+    /// not say) is always `false`, so the fast path never answers for it.
+    fn stays_linear(&self, _history: &[f64], _jump: [f64; 2], _error: [f64; 2], _closed: bool) -> bool {
+        false
+    }
+
     /// Whether a history read from a checkpoint is admissible for this law.
     fn history_is_valid(&self, history: &[f64]) -> bool {
         history.iter().all(|v| v.is_finite())

@@ -37,6 +37,11 @@ impl InterfaceLaw for LinearInterface {
             branch: Branch::Unloading,
         }
     }
+
+    /// Always: the law is linear and has no history.
+    fn stays_linear(&self, _history: &[f64], _jump: [f64; 2], _error: [f64; 2], _closed: bool) -> bool {
+        true
+    }
 }
 
 #[cfg(test)]

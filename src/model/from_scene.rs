@@ -24,6 +24,7 @@ pub fn solver_settings(spec: &SolverSpec) -> Settings {
             ContactStatusSpec::ActiveSet => ContactStatus::ActiveSet,
             ContactStatusSpec::PerIteration => ContactStatus::PerIteration,
         },
+        fast_path: spec.fast_path,
     }
 }
 

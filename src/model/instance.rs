@@ -7,8 +7,7 @@ use std::sync::Arc;
 
 use super::rve_model::{Model, Response};
 use crate::error::{Error, Result};
-use crate::solver::TangentRequest;
-use crate::solver::Workspace;
+use crate::solver::{Answer, TangentRequest, Workspace};
 use crate::state::persist::{self, StateSizes};
 use crate::state::State;
 
@@ -20,16 +19,46 @@ use crate::state::State;
 /// virgin state. The committed state is only ever replaced whole (a swap or an
 /// assignment), so a panic inside an update leaves it intact.
 ///
-/// Memory: the trial state is allocated by the first update, so an instance that has
-/// never been updated holds one state, not two (a host may create 10^5 of them).
+/// Updates that need no solve: the fast path ([`Model::fast_update`]), and a trial
+/// repeated at the same strain (bit for bit) before it is committed or discarded, which
+/// returns the stored trial's response. Both allocate nothing and are counted by
+/// [`fast_updates`](Self::fast_updates).
+///
+/// Memory: the trial state is allocated by the first full update, so an instance that has
+/// never been updated holds one state, not two (a host may create 10^5 of them). A fast
+/// trial needs no buffers: committing one releases the trial state, so that an instance
+/// that stays on its linear branches (unloaded, or closed in compression) holds one
+/// state plus the fast path's data; its next full update allocates the trial again.
 #[derive(Debug)]
 pub struct Instance {
     model: Arc<Model>,
     committed: State,
-    /// The last trial's buffers; `None` until the first update.
+    /// The last full trial's buffers; `None` until the first full update.
     trial: Option<State>,
-    /// Whether `trial` holds a successful update not yet committed or discarded.
-    has_trial: bool,
+    /// The trial awaiting commit or revert, if any.
+    pending: Pending,
+    /// The response of the pending trial, for a repeated call.
+    last: Option<LastTrial>,
+    /// Updates answered without a solve (fast path and repeats) since creation.
+    fast_updates: u64,
+}
+
+/// The trial awaiting [`Instance::commit`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Pending {
+    Nothing,
+    /// A solved trial, in `Instance::trial`.
+    Solved,
+    /// A fast trial: the committed state at this strain (same history).
+    Fast([f64; 3]),
+}
+
+/// What a repeated update returns.
+#[derive(Clone, Copy, Debug)]
+struct LastTrial {
+    strain: [f64; 3],
+    request: TangentRequest,
+    response: Response,
 }
 
 impl Instance {
@@ -40,7 +69,9 @@ impl Instance {
             model,
             committed,
             trial: None,
-            has_trial: false,
+            pending: Pending::Nothing,
+            last: None,
+            fast_updates: 0,
         }
     }
 
@@ -48,55 +79,109 @@ impl Instance {
         &self.model
     }
 
-    /// The last committed state.
+    /// The last committed state. After fast updates its unknowns may lag behind its
+    /// strain ([`State::unknowns_are_current`]); [`Model::current_state`] forms them.
     pub fn committed(&self) -> &State {
         &self.committed
     }
 
     /// Whether a successful trial awaits [`commit`](Self::commit).
     pub fn has_trial(&self) -> bool {
-        self.has_trial
+        self.pending != Pending::Nothing
     }
 
-    /// Trial update at `strain` from the committed state (see [`Model::update`]). On
-    /// failure the trial is discarded and the committed state is unchanged.
+    /// Updates answered without a solve (fast path and repeated trials) since creation.
+    pub fn fast_updates(&self) -> u64 {
+        self.fast_updates
+    }
+
+    /// Trial update at `strain` from the committed state: a repeat of the pending trial,
+    /// the fast path, or a solve ([`Model::update`]). On failure the trial is discarded
+    /// and the committed state is unchanged.
     pub fn update(
         &mut self,
         strain: [f64; 3],
         ws: &mut Workspace,
         request: TangentRequest,
     ) -> Result<Response> {
-        self.has_trial = false;
+        if let Some(response) = self.repeated(strain, request) {
+            self.fast_updates += 1;
+            return Ok(response);
+        }
+        self.pending = Pending::Nothing;
+        self.last = None;
         let model = &self.model;
-        let trial = self.trial.get_or_insert_with(|| model.new_state());
-        let out = model.update(&self.committed, strain, ws, trial, request);
-        self.has_trial = out.is_ok();
-        out
+        let response = match model.fast_update(&self.committed, strain, request)? {
+            Some(response) => {
+                self.fast_updates += 1;
+                self.pending = Pending::Fast(strain);
+                response
+            }
+            None => {
+                let trial = self.trial.get_or_insert_with(|| model.new_state());
+                let response = model.update(&self.committed, strain, ws, trial, request)?;
+                self.pending = Pending::Solved;
+                response
+            }
+        };
+        self.last = Some(LastTrial {
+            strain,
+            request,
+            response,
+        });
+        Ok(response)
+    }
+
+    /// The pending trial's response when `strain` repeats its strain bit for bit and it
+    /// holds what `request` asks for.
+    fn repeated(&self, strain: [f64; 3], request: TangentRequest) -> Option<Response> {
+        let last = self.last.as_ref().filter(|_| self.has_trial())?;
+        let same = last.strain.map(f64::to_bits) == strain.map(f64::to_bits);
+        let enough = last.request == request || last.request == TangentRequest::Consistent;
+        if !(same && enough) {
+            return None;
+        }
+        let mut response = last.response;
+        if request == TangentRequest::None {
+            response.tangent = [0.0; 9];
+            response.s_zz_tangent = [0.0; 3];
+        }
+        response.report.answer = Answer::Repeated;
+        Some(response)
     }
 
     /// Accepts the last successful trial as the new converged state; `NoTrial` when
     /// there is none (no successful update since the last commit, revert, reset or load).
     pub fn commit(&mut self) -> Result<()> {
-        match (&mut self.trial, self.has_trial) {
-            (Some(trial), true) => {
-                std::mem::swap(&mut self.committed, trial);
-                self.has_trial = false;
-                Ok(())
+        match (self.pending, &mut self.trial) {
+            (Pending::Solved, Some(trial)) => std::mem::swap(&mut self.committed, trial),
+            (Pending::Fast(strain), _) => {
+                // The state at the new strain: same history, unknowns lazy (see
+                // `LinearBranch`), no path curvature (a full update on linear branches
+                // keeps none either). The trial's buffers are released.
+                self.committed.strain = strain;
+                self.committed.curvature.valid = false;
+                self.committed.curvature.data = Default::default();
+                self.trial = None;
             }
-            _ => Err(Error::NoTrial),
+            _ => return Err(Error::NoTrial),
         }
+        self.pending = Pending::Nothing;
+        self.last = None;
+        Ok(())
     }
 
     /// Discards the last trial; the committed state stays.
     pub fn revert(&mut self) {
-        self.has_trial = false;
+        self.pending = Pending::Nothing;
+        self.last = None;
     }
 
     /// Back to the virgin state, as a new instance (the trial's buffers are released).
     pub fn reset(&mut self) {
         self.committed = self.model.new_state();
         self.trial = None;
-        self.has_trial = false;
+        self.revert();
     }
 
     /// The sizes the model's states have, as recorded in the state bytes.
@@ -137,8 +222,19 @@ impl Instance {
                 });
             }
         }
+        let points = self.model.disc.interface_points();
+        if state.linear.valid
+            && (self.model.disc.law.is_none() || !state.linear.is_consistent(points))
+        {
+            return Err(Error::BadState {
+                reason: format!(
+                    "fast-path data for another number of interface points than the \
+                     model's {points}"
+                ),
+            });
+        }
         self.committed = state;
-        self.has_trial = false;
+        self.revert();
         Ok(())
     }
 

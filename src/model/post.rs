@@ -10,9 +10,11 @@ use crate::io::{write_vtu_fields, RveFields};
 use crate::state::State;
 
 impl Model {
-    /// The micro fields of `state` (a state of this model) on the mesh.
-    pub fn fields(&self, state: &State) -> RveFields {
-        RveFields::compute(self.mesh(), &self.disc, state)
+    /// The micro fields of `state` (a state of this model) on the mesh; a state left by
+    /// fast updates has its unknowns formed first ([`Model::current_state`]).
+    pub fn fields(&self, state: &State) -> Result<RveFields> {
+        let state = self.current_state(state)?;
+        Ok(RveFields::compute(self.mesh(), &self.disc, &state))
     }
 
     /// Writes the fields of `state` as a `.vtu` file at `path` (see
@@ -22,8 +24,9 @@ impl Model {
             path: path.to_path_buf(),
             source,
         };
+        let fields = self.fields(state)?;
         let mut w = BufWriter::new(File::create(path).map_err(io_err)?);
-        write_vtu_fields(self.mesh(), &self.fields(state), &mut w).map_err(io_err)?;
+        write_vtu_fields(self.mesh(), &fields, &mut w).map_err(io_err)?;
         w.flush().map_err(io_err)
     }
 }

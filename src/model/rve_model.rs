@@ -1,6 +1,7 @@
 //! The shared model of one scene: mesh, materials, constraint map, sparsity pattern,
 //! symbolic factorization, homogenization operators and the elastic tangent.
 
+use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::from_scene::{boundary_condition, interface_law, solver_settings};
@@ -12,7 +13,8 @@ use crate::homogenization::Homogenizer;
 use crate::mesh::{Mesh, Microstructure};
 use crate::scene::{Scene, MAX_STRAIN};
 use crate::solver::{
-    solve_increment, IncrementReport, LinearSolver, Problem, Settings, TangentRequest, Workspace,
+    fast_path, solve_increment, Answer, IncrementReport, LinearSolver, Problem, Settings,
+    TangentRequest, Workspace,
 };
 use crate::state::State;
 
@@ -144,6 +146,10 @@ impl Model {
     /// writes the converged trial state into `trial`, and returns the homogenized stress
     /// and (if asked) the consistent tangent. Never modifies `committed`; identical inputs
     /// give bit-identical outputs.
+    ///
+    /// The trial keeps the fast path's data ([`crate::state::LinearBranch`]) when every
+    /// interface point ends on a linear branch and the tangent was requested; this
+    /// function always solves ([`Model::fast_update`] is the fast path).
     pub fn update(
         &self,
         committed: &State,
@@ -155,24 +161,8 @@ impl Model {
         if ws.model_id() != self.id {
             return Err(Error::WorkspaceMismatch);
         }
-        if strain.iter().any(|e| !e.is_finite()) {
-            return Err(Error::BadStrain {
-                strain,
-                reason: "not finite".into(),
-            });
-        }
-        if strain.iter().any(|e| e.abs() > MAX_STRAIN) {
-            return Err(Error::BadStrain {
-                strain,
-                reason: format!("a component exceeds {MAX_STRAIN} (small-strain model)"),
-            });
-        }
-        let problem = Problem {
-            disc: &self.disc,
-            linear: &self.linear,
-            settings: &self.solver,
-            predictor: &self.elastic_sensitivity,
-        };
+        check_strain(strain)?;
+        let problem = self.problem();
         let solved = solve_increment(&problem, committed, strain, request, ws, trial)?;
         let tangent = match request {
             TangentRequest::Consistent => self.hom.tangent_from_condensed(&solved.condensed),
@@ -198,6 +188,9 @@ impl Model {
                 suggested_step_ratio: 0.5,
             });
         }
+        if request == TangentRequest::Consistent {
+            fast_path::build(&problem, trial, tangent, s_zz_tangent, ws);
+        }
         Ok(Response {
             stress,
             tangent,
@@ -206,4 +199,80 @@ impl Model {
             report: solved.report,
         })
     }
+
+    /// The fast path's answer at `strain` from `committed` (see [`crate::solver::fast_path`]):
+    /// `Some` when every interface point provably stays on the linear branch of the
+    /// committed state's branch set, `None` when the update needs a solve. Exact to
+    /// round-off against [`Model::update`]; the trial state is `committed` at `strain`
+    /// with the same history (no buffers needed). Allocates nothing.
+    pub fn fast_update(
+        &self,
+        committed: &State,
+        strain: [f64; 3],
+        request: TangentRequest,
+    ) -> Result<Option<Response>> {
+        check_strain(strain)?;
+        let linear = &committed.linear;
+        if !fast_path::answers(&self.problem(), &committed.history, linear, &strain) {
+            return Ok(None);
+        }
+        let (stress, s_zz) = fast_path::response(linear, &strain);
+        let (tangent, s_zz_tangent) = match request {
+            TangentRequest::Consistent => (linear.tangent, linear.szz),
+            TangentRequest::None => ([0.0; 9], [0.0; 3]),
+        };
+        let contact = linear.closed.iter().filter(|&&c| c).count();
+        Ok(Some(Response {
+            stress,
+            tangent,
+            s_zz,
+            s_zz_tangent,
+            report: IncrementReport {
+                unloading: linear.closed.len() - contact,
+                contact,
+                answer: Answer::FastPath,
+                ..Default::default()
+            },
+        }))
+    }
+
+    /// `state` with its unknowns at its own strain: itself, or (after fast updates, see
+    /// [`crate::state::LinearBranch`]) a copy with `X_b eps` formed, which costs one
+    /// factorization in a workspace made for it. For outputs, not for the hot path.
+    pub fn current_state<'s>(&self, state: &'s State) -> Result<Cow<'s, State>> {
+        if state.unknowns_are_current() {
+            return Ok(Cow::Borrowed(state));
+        }
+        let mut ws = self.workspace();
+        let mut out = self.new_state();
+        fast_path::materialize(&self.problem(), state, &mut out, &mut ws)?;
+        Ok(Cow::Owned(out))
+    }
+
+    /// The problem the solver sees.
+    fn problem(&self) -> Problem<'_> {
+        Problem {
+            disc: &self.disc,
+            linear: &self.linear,
+            settings: &self.solver,
+            predictor: &self.elastic_sensitivity,
+        }
+    }
+}
+
+/// Refuses a strain that is not finite or beyond the small-strain range.
+fn check_strain(strain: [f64; 3]) -> Result<()> {
+    if strain.iter().any(|e| !e.is_finite()) {
+        return Err(Error::BadStrain {
+            strain,
+            reason: "not finite".into(),
+        });
+    }
+    if strain.iter().any(|e| e.abs() > MAX_STRAIN) {
+        return Err(Error::BadStrain {
+            strain,
+            reason: format!("a component exceeds {MAX_STRAIN} (small-strain model)"),
+        });
+    }
+    Ok(())
 }

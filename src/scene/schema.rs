@@ -284,6 +284,11 @@ pub struct SolverSpec {
     /// [`ContactStatusSpec`] and `docs/contact-algorithm.md`.
     #[serde(default)]
     pub contact_status: ContactStatusSpec,
+    /// Answer an update without Newton when every ITZ point provably stays on the linear
+    /// branch (unloading or contact) it had at the last full solve: `sigma = D_b eps`,
+    /// exact (see `solver::fast_path`); `false` solves every update.
+    #[serde(default = "yes")]
+    pub fast_path: bool,
 }
 
 /// `solver.contact_status`: when the solver reads the contact status of the ITZ points
@@ -314,6 +319,7 @@ impl Default for SolverSpec {
             reuse_factorization: true,
             second_order_predictor: true,
             contact_status: ContactStatusSpec::ActiveSet,
+            fast_path: true,
         }
     }
 }

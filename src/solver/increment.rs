@@ -28,11 +28,13 @@ use super::arclength::{trace, StrainLine, Traced};
 use super::contact;
 use super::newton::{newton, Failure, Mode};
 use super::predictor::{predict, store_curvature, Prediction, StrainStep};
-use super::problem::{sensitivity_times, Problem, Strain};
+use super::fast_path;
+use super::problem::{accept_candidate, norm, sensitivity_times, Problem, Strain};
 use super::settings::{IncrementReport, Settings, TangentRequest};
 use super::tangent::{condensed, condensed_tangent};
 use super::workspace::Workspace;
 use crate::error::{Error, Result};
+use crate::interface::TangentKind;
 use crate::state::State;
 
 /// What a converged increment returns besides the trial state.
@@ -87,7 +89,36 @@ struct Increment<'p, 'a> {
 /// Solves the RVE from the committed state to the macro strain `strain`, writing the
 /// converged state into `trial` (resized like `committed`). `committed` is never
 /// modified.
+///
+/// A committed state left by fast updates (its unknowns at another strain, see
+/// `fast_path`) is first given its unknowns at its strain, in the workspace.
 pub fn solve_increment(
+    problem: &Problem,
+    committed: &State,
+    strain: Strain,
+    request: TangentRequest,
+    ws: &mut Workspace,
+    trial: &mut State,
+) -> Result<Solved> {
+    if committed.unknowns_are_current() {
+        return solve_from(problem, committed, strain, request, ws, trial);
+    }
+    let numeric = ws.factorization.numeric();
+    let before = numeric.count;
+    let mut start = std::mem::replace(&mut ws.materialized, State::virgin(0, 0));
+    let solved = fast_path::materialize(problem, committed, &mut start, ws)
+        .and_then(|()| solve_from(problem, &start, strain, request, ws, trial));
+    ws.materialized = start;
+    // The materialization's factorization counts with the update's.
+    solved.map(|mut s| {
+        s.report.factorizations += 1;
+        debug_assert!(ws.factorization.numeric().count >= before + 1);
+        s
+    })
+}
+
+/// [`solve_increment`] from a committed state whose unknowns are current.
+fn solve_from(
     problem: &Problem,
     committed: &State,
     strain: Strain,
@@ -98,6 +129,7 @@ pub fn solve_increment(
     let numeric = ws.factorization.numeric();
     let before = (numeric.count, numeric.lu_count, numeric.lblt_count);
     trial.copy_from(committed);
+    trial.linear.valid = false;
     contact::configure(problem, ws);
     if problem.n() == 0
         || (problem.disc.interfaces.is_empty() && problem.predictor.len() == 3 * problem.n())
@@ -124,7 +156,9 @@ pub fn solve_increment(
         report: IncrementReport::default(),
     };
     increment.substeps(strain, trial, ws)?;
+    let polished = polish(problem, &strain, trial, ws);
     let mut report = increment.report;
+    report.iterations += u32::from(polished);
     let counts = ws.current.counts;
     (report.loading, report.unloading, report.contact) =
         (counts.loading, counts.unloading, counts.contact);
@@ -135,9 +169,14 @@ pub fn solve_increment(
         trial.sensitivity.store_negated(ws.factorization.kg());
     }
     // The path curvature for the next increment, kept when this one converged from its
-    // first-order prediction in one Newton loop and refreshed the sensitivity.
-    let smooth =
-        problem.settings.second_order_predictor && increment.tangent_start && !increment.hard;
+    // first-order prediction in one Newton loop and refreshed the sensitivity, and had a
+    // loading point: on linear branches only the path is a straight line (`x = X_b eps`,
+    // see `fast_path`), whose curvature is zero, and a fast update, which keeps none,
+    // leaves the same state.
+    let smooth = problem.settings.second_order_predictor
+        && increment.tangent_start
+        && !increment.hard
+        && !(problem.disc.law.is_some() && report.loading == 0);
     if request == TangentRequest::Consistent && smooth {
         store_curvature(committed, delta, ws, trial);
     } else {
@@ -151,6 +190,40 @@ pub fn solve_increment(
         report,
         condensed: solved,
     })
+}
+
+/// On linear branches only (no loading point at the converged iterate) the equilibrium is
+/// linear, `K_b x + G eps = 0`, and one correction with the exact `K_b` solves it to
+/// round-off. Made after every such increment, whatever iterate its loop stopped at
+/// within the tolerance (the predictor itself, a chord step): the update then returns
+/// `x = X_b eps`, the answer of the fast path (`fast_path`), and the factors of `K_b`
+/// are left for the tangent. The corrected iterate is kept when it stays on the branch
+/// set and does not raise the residual. Returns whether it was kept.
+fn polish(problem: &Problem, strain: &Strain, trial: &mut State, ws: &mut Workspace) -> bool {
+    if problem.disc.law.is_none() || ws.current.counts.loading > 0 {
+        return false;
+    }
+    if !ws.factorization.factorizes(&ws.current.k) && problem.factorize(ws, true).is_err() {
+        return false;
+    }
+    ws.dx
+        .iter_mut()
+        .zip(&ws.current.r)
+        .for_each(|(d, r)| *d = -r);
+    ws.factorization.solve(problem.linear, &mut ws.dx, 1);
+    for ((t, x), d) in ws.x_try.iter_mut().zip(&trial.unknowns).zip(&ws.dx) {
+        *t = x + d;
+    }
+    problem.evaluate_candidate(strain, TangentKind::Consistent, ws);
+    let same_branches =
+        ws.candidate.counts.branch_signature == ws.current.counts.branch_signature;
+    if !(same_branches && norm(&ws.candidate.r) <= norm(&ws.current.r)) {
+        return false;
+    }
+    trial.unknowns.copy_from_slice(&ws.x_try);
+    accept_candidate(ws);
+    trial.history.copy_from_slice(&ws.current.history);
+    true
 }
 
 /// The exact response of a linear RVE: without fluctuation (Taylor) nothing to solve;

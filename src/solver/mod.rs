@@ -4,12 +4,16 @@
 //! its remedy ladder (`increment`) above them. The per-thread `workspace` holds every
 //! buffer, so a solve allocates nothing.
 //!
-//! Dependencies inside: `increment -> {predictor, newton, arclength, tangent}`,
+//! The fast path (`fast_path`) answers updates that keep every interface point on its
+//! linear branch without any of them.
+//!
+//! Dependencies inside: `increment -> {fast_path, predictor, newton, arclength, tangent}`,
 //! `arclength -> newton`, all of them `-> contact -> problem -> {linear, workspace,
 //! settings}`.
 
 mod arclength;
 mod contact;
+pub mod fast_path;
 mod increment;
 mod linear;
 mod newton;
@@ -22,5 +26,5 @@ mod workspace;
 pub use increment::{solve_increment, Solved};
 pub use linear::{FactorKind, LinearSolver, NumericFactor};
 pub use problem::{Problem, Strain};
-pub use settings::{ContactStatus, IncrementReport, Settings, TangentRequest};
+pub use settings::{Answer, ContactStatus, IncrementReport, Settings, TangentRequest};
 pub use workspace::{Factorization, Workspace};

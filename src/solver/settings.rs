@@ -23,6 +23,9 @@ pub struct Settings {
     pub second_order_predictor: bool,
     /// When the contact status of the interface points is read (see `contact`).
     pub contact_status: ContactStatus,
+    /// Answer updates that keep every interface point on its linear branch without
+    /// Newton (see `fast_path`).
+    pub fast_path: bool,
 }
 
 /// When the solver reads the contact status of the interface points from their gaps
@@ -75,4 +78,26 @@ pub struct IncrementReport {
     /// `contact`): 0 means the converged state is an equilibrium of the law with the
     /// status read from the gaps.
     pub held_points: usize,
+    /// How the update was answered.
+    pub answer: Answer,
+}
+
+/// How an update was answered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Answer {
+    /// By the equilibrium solve.
+    #[default]
+    Solved,
+    /// By the fast path: every interface point stays on its linear branch, the response
+    /// is `D_b eps` (see `fast_path`).
+    FastPath,
+    /// The instance's pending trial at the same strain, returned again.
+    Repeated,
+}
+
+impl Answer {
+    /// Answered without an equilibrium solve (fast path or repeated trial).
+    pub fn is_fast(self) -> bool {
+        self != Answer::Solved
+    }
 }

@@ -148,6 +148,11 @@ impl Factorization {
         }
     }
 
+    /// Whether `kg` is exactly `K_f^-1 G` for the current factors (not a refined one).
+    pub(super) fn kg_is_of_factor(&self) -> bool {
+        self.kg_of_factor
+    }
+
     /// `K^-1 G` (or its best approximation) from the last tangent computation.
     pub fn kg(&self) -> &[f64] {
         &self.kg
@@ -213,6 +218,8 @@ pub struct Workspace {
     pub(super) history_start: Vec<f64>,
     /// State at the start of the current sub-step (for sub-stepping).
     pub(super) substep_start: State,
+    /// A lazy committed state with its unknowns formed (see `fast_path::materialize`).
+    pub(super) materialized: State,
     pub(super) trace: TraceBuffers,
     pub(super) contact: ContactBuffers,
     /// Relative residual norms of the last Newton loop, and the interface branch signature
@@ -248,6 +255,7 @@ impl Workspace {
             kg_res: vec![0.0; 3 * n],
             history_start: vec![0.0; nh],
             substep_start: State::virgin(n, nh),
+            materialized: State::virgin(n, nh),
             trace: TraceBuffers {
                 f: zeros(),
                 dxf: zeros(),

@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::linear_branch::LinearBranch;
+
 /// Converged (or trial) state of one RVE instance.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct State {
@@ -19,6 +21,10 @@ pub struct State {
     /// The second-order term of the fluctuation path, from the increment that led here
     /// (see [`PathCurvature`]).
     pub curvature: PathCurvature,
+    /// The fast path's data while every interface point is on a linear branch (see
+    /// [`LinearBranch`]); when valid, `unknowns` hold the fluctuation at
+    /// `linear.unknowns_strain`, which may differ from `strain`.
+    pub linear: LinearBranch,
 }
 
 /// Values per quantization block of a [`Quantized`] vector.
@@ -189,7 +195,14 @@ impl State {
             history: vec![0.0; n_history],
             sensitivity: Sensitivity::empty(),
             curvature: PathCurvature::empty(),
+            linear: LinearBranch::default(),
         }
+    }
+
+    /// Whether `unknowns` hold the fluctuation at `strain` (false after fast updates: the
+    /// fluctuation is then `X_b strain`, see [`LinearBranch`]).
+    pub fn unknowns_are_current(&self) -> bool {
+        !self.linear.valid || self.linear.unknowns_strain == self.strain
     }
 
     /// Copies `other` into `self` without reallocating (sizes must match), but for the
@@ -203,6 +216,7 @@ impl State {
         self.curvature.valid = other.curvature.valid;
         self.curvature.step = other.curvature.step;
         self.curvature.data.copy_from(&other.curvature.data);
+        self.linear.copy_from(&other.linear);
     }
 
     /// Heap and inline bytes of this state.
@@ -212,6 +226,7 @@ impl State {
             + self.history.capacity() * std::mem::size_of::<f64>()
             + self.sensitivity.data.bytes()
             + self.curvature.data.bytes()
+            + self.linear.bytes()
     }
 }
 

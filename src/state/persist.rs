@@ -30,7 +30,8 @@
 //! | 3 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 16-bit (read, sensitivity dropped: the next increment starts from the elastic predictor) |
 //! | 4 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 8-bit by blocks, empty until filled ([`Sensitivity`]) (read, kept) |
 //! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`PathCurvature`](super::PathCurvature)) (read, kept) |
-//! | 6 | main after 0.1.0 | format 5 plus the trailing CRC-32C (written) |
+//! | 6 | 0.2.0 | format 5 plus the trailing CRC-32C (read, kept; no fast-path data: the next update solves) |
+//! | 7 | main after 0.2.0 | format 6 plus the fast path's [`LinearBranch`](super::LinearBranch) (written) |
 //!
 //! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
 //! model, so this module depends on the state alone; `model::Instance::save_state` and
@@ -38,14 +39,18 @@
 
 use serde::Deserialize;
 
-use super::instance_state::{Sensitivity, State};
+use super::instance_state::{PathCurvature, Sensitivity, State};
 use crate::error::{Error, Result};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format written; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 6;
-/// Older formats this library still reads (without a checksum).
+pub const STATE_FORMAT_VERSION: u32 = 7;
+/// Older formats this library still reads without a checksum.
 pub const READABLE_OLD_FORMATS: [u32; 5] = [1, 2, 3, 4, 5];
+/// Older formats this library still reads, with the trailing checksum.
+pub const READABLE_CHECKED_FORMATS: [u32; 1] = [6];
+/// Every older format this library reads.
+const READABLE_FORMATS: [u32; 6] = [1, 2, 3, 4, 5, 6];
 const HEADER: usize = 40;
 /// Bytes of the trailing CRC-32C.
 const CHECKSUM: usize = 4;
@@ -101,10 +106,13 @@ pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
     } else {
         checked(bytes, version)?
     };
-    if version != STATE_FORMAT_VERSION && !READABLE_OLD_FORMATS.contains(&version) {
+    if version != STATE_FORMAT_VERSION
+        && !READABLE_OLD_FORMATS.contains(&version)
+        && !READABLE_CHECKED_FORMATS.contains(&version)
+    {
         return Err(Error::StateVersion {
             found: version,
-            older: &READABLE_OLD_FORMATS,
+            older: &READABLE_FORMATS,
             current: STATE_FORMAT_VERSION,
         });
     }
@@ -134,6 +142,7 @@ pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
         || !filled_if_valid(state.sensitivity.valid, &state.sensitivity.data.values)
         || !state.curvature.data.is_consistent(n as usize)
         || !filled_if_valid(state.curvature.valid, &state.curvature.data.values)
+        || !state.linear.is_consistent(state.linear.closed.len())
     {
         return Err(bad("payload sizes disagree with the header"));
     }
@@ -197,6 +206,7 @@ fn payload(version: u32, payload: &[u8]) -> Result<State> {
         3 => read::<Format3>(payload)?.into(),
         4 => read::<Format4>(payload)?.into(),
         // Formats 5 and 6 have the same payload.
+        5 | 6 => read::<Format6>(payload)?.into(),
         _ => read::<State>(payload)?,
     })
 }
@@ -291,6 +301,24 @@ impl From<Format4> for State {
     }
 }
 
+/// Formats 5 and 6: format 4 plus the [`PathCurvature`], without fast-path data.
+#[derive(Deserialize)]
+struct Format6 {
+    strain: [f64; 3],
+    unknowns: Vec<f64>,
+    history: Vec<f64>,
+    sensitivity: Sensitivity,
+    curvature: PathCurvature,
+}
+
+impl From<Format6> for State {
+    fn from(old: Format6) -> Self {
+        let mut state = old_state(old.strain, old.unknowns, old.history, Some(old.sensitivity));
+        state.curvature = old.curvature;
+        state
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -340,7 +368,7 @@ mod tests {
         // A later format with its checksum is StateVersion; a changed version without
         // a new checksum is corruption.
         let mut other = bytes.clone();
-        other[8] = 7;
+        other[8] = 8;
         assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
         let body = other.len() - CHECKSUM;
         let sum = crc32c::crc32c(&other[..body]);
@@ -348,8 +376,8 @@ mod tests {
         assert!(matches!(
             decode(&other, SIZES),
             Err(Error::StateVersion {
-                found: 7,
-                current: 6,
+                found: 8,
+                current: 7,
                 ..
             })
         ));
