@@ -293,6 +293,19 @@ uint32_t rve_free(RveHandle h);
 // NUL-terminated) for the duration of the call.
 uint32_t rve_state_size(RveHandle h, size_t *size);
 
+// Writes to `*count` how many updates of the instance were answered without an RVE
+// solve since it was created: by the fast path (every interface point stays on the
+// linear branch of its last full solve: unloading to the origin or contact, the stress
+// is exactly `D_b eps`) or as a repeat of the pending trial at the same strain, bit for
+// bit. (`RveInfo` keeps its 0.2.0 layout, ABI 0; the difference of this count before
+// and after an update tells whether that update was fast.) Returns `OK`,
+// `NULL_ARGUMENT`, `BAD_HANDLE`, `INSTANCE_BUSY` or `PANIC`; `*count` written on success.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_fast_updates(RveHandle h, uint64_t *count);
+
 // Serialises the instance's committed state (not the trial) into `buf[0..len)`, in a
 // versioned byte format (checkpoint/restart; see `rve_state_load`), and writes the
 // byte count to `*written`. When `len` is too small nothing is written to `buf`,
