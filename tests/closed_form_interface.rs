@@ -489,7 +489,9 @@ fn compare(setup: &Setup, strains: &[[f64; 3]], name: &str) -> Errors {
             .max(refp.stress[0].abs().max(refp.stress[2].abs()));
 
         // Every element's nodal jumps equal the uniform reference jump.
-        let x = &instance.committed().unknowns;
+        // The unknowns at the committed strain (fast updates leave them lazy).
+        let current = model.current_state(instance.committed()).unwrap();
+        let x = &current.unknowns;
         let val = |d: u32| if d == FIXED { 0.0 } else { x[d as usize] };
         for dofs in &model.disc.interface_dofs {
             for node in 0..2 {

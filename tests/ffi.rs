@@ -290,6 +290,11 @@ fn curvature_bytes(n: usize, filled: bool) -> usize {
 /// Bytes of the trailing CRC-32C of state format 6.
 const CHECKSUM: usize = 4;
 
+/// Bytes of format 7's fast-path data when not valid: the valid flag, `D_b` (9 f64), the
+/// `s_zz` row (3 f64), the empty jump operators and contact status (their u64 lengths),
+/// the anchor strain (3 f64).
+const NO_FAST_PATH_DATA: usize = 1 + 72 + 24 + 8 + 8 + 24;
+
 /// State bytes of format >= 6 with their trailing checksum recomputed (a deliberate edit).
 fn with_checksum(mut bytes: Vec<u8>) -> Vec<u8> {
     let body = bytes.len() - CHECKSUM;
@@ -337,7 +342,7 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
     // A format this library does not know, with a valid checksum (a later version), is
     // STATE_VERSION; the same version change without a new checksum is corruption.
-    for unknown_version in [0u8, 7] {
+    for unknown_version in [0u8, 8] {
         let mut other_version = bytes.clone();
         other_version[8] = unknown_version;
         assert_eq!(load(&other_version), RveStatus::BadState as u32);
@@ -348,10 +353,11 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     }
     // A negative delta_max is refused, and the instance keeps its state.
     // The payload ends with the history, the sensitivity and the path curvature, both
-    // filled by the committed updates with tangent, then the checksum.
+    // filled by the committed updates with tangent, the fast-path data (none: the points
+    // load), then the checksum.
     let mut negative = bytes.clone();
     let n = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
-    let curvature_at = negative.len() - CHECKSUM - curvature_bytes(n, true);
+    let curvature_at = negative.len() - CHECKSUM - NO_FAST_PATH_DATA - curvature_bytes(n, true);
     assert_eq!(
         bytes[curvature_at], 1,
         "the path curvature is filled and valid"
@@ -556,7 +562,7 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         "{sig_old:?} vs {sig_new:?}"
     );
     assert!(rel(&d_old, &d_new) <= 1e-6, "{d_old:?} vs {d_new:?}");
-    // Saved again, it is the current format (6) with the sensitivity (the increment from
+    // Saved again, it is the current format (7) with the sensitivity (the increment from
     // the elastic predictor left the path curvature empty), and loads back.
     let mut size = 0;
     assert_eq!(rve_commit(old), OK);
@@ -567,12 +573,12 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         unsafe { rve_state_save(old, saved.as_mut_ptr(), size, &mut written) },
         OK
     );
-    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 6);
+    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 7);
     assert_eq!(
         unsafe { rve_state_load(fresh, saved.as_ptr(), written) },
         OK
     );
-    // Format 5: format 6 without the checksum; format 4: without the path curvature
+    // Format 5: format 7 without the fast-path data and the checksum; format 4: without the path curvature
     // either.
     let n = u64::from_le_bytes(saved[16..24].try_into().unwrap()) as usize;
     let with_version = |mut bytes: Vec<u8>, version: u32| {
@@ -581,8 +587,9 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         bytes[32..40].copy_from_slice(&payload.to_le_bytes());
         bytes
     };
-    let format5 = with_version(saved[..written - CHECKSUM].to_vec(), 5);
-    let format4_len = written - CHECKSUM - curvature_bytes(n, false);
+    let format6_len = written - CHECKSUM - NO_FAST_PATH_DATA;
+    let format5 = with_version(saved[..format6_len].to_vec(), 5);
+    let format4_len = format6_len - curvature_bytes(n, false);
     let format4 = with_version(saved[..format4_len].to_vec(), 4);
     // Format 2: without the sensitivity either.
     let format2 = with_version(saved[..format4_len - sensitivity_bytes(n)].to_vec(), 2);

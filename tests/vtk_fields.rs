@@ -24,7 +24,7 @@ fn area_average_of_cell_stresses_is_the_homogenized_stress() {
     for eps in path_points(&scene.spec.path) {
         let r = instance.update(eps, &mut ws, TangentRequest::None).unwrap();
         instance.commit().unwrap();
-        let fields = model.fields(instance.committed());
+        let fields = model.fields(instance.committed()).unwrap();
         assert_eq!(fields.stress.len(), model.mesh().triangles.len());
         assert_eq!(fields.itz.len(), model.mesh().interfaces.len());
         let avg = fields.average_stress(model.disc.volume);
@@ -74,7 +74,7 @@ fn open_elements_do_not_exceed_their_delta_max() {
     for eps in path_points(&scene.spec.path) {
         instance.update(eps, &mut ws, TangentRequest::None).unwrap();
         instance.commit().unwrap();
-        for e in model.fields(instance.committed()).itz {
+        for e in model.fields(instance.committed()).unwrap().itz {
             if e.closed_points == 0 {
                 let m = e.measures;
                 assert!(m.opening_ratio <= m.max_opening_ratio * (1.0 + 1e-12));

@@ -132,20 +132,17 @@ impl Instance {
         Ok(response)
     }
 
-    /// The pending trial's response when `strain` repeats its strain bit for bit and it
-    /// holds what `request` asks for.
+    /// The pending trial's response when `strain` and `request` repeat its own, the strain
+    /// bit for bit. (Only the same request: a trial with the tangent also stored the
+    /// predictor's sensitivity and the fast path's data, which one without does not, and
+    /// the trial a commit accepts must be the one the last call would have computed.)
     fn repeated(&self, strain: [f64; 3], request: TangentRequest) -> Option<Response> {
         let last = self.last.as_ref().filter(|_| self.has_trial())?;
         let same = last.strain.map(f64::to_bits) == strain.map(f64::to_bits);
-        let enough = last.request == request || last.request == TangentRequest::Consistent;
-        if !(same && enough) {
+        if !(same && last.request == request) {
             return None;
         }
         let mut response = last.response;
-        if request == TangentRequest::None {
-            response.tangent = [0.0; 9];
-            response.s_zz_tangent = [0.0; 3];
-        }
         response.report.answer = Answer::Repeated;
         Some(response)
     }

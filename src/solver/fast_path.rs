@@ -105,7 +105,7 @@ pub fn build(
     szz: [f64; 3],
     ws: &mut Workspace,
 ) {
-    state.linear.valid = false;
+    state.linear.invalidate();
     let Some(law) = problem.disc.law.as_deref() else {
         return;
     };
@@ -137,7 +137,9 @@ pub fn build(
     linear.valid = true;
     // The anchor itself must pass the check (a closed point sliding on the loading branch
     // of the cohesive shear, a point at a branch boundary): otherwise no fast path.
-    state.linear.valid = answers(problem, &state.history, &state.linear, &state.strain);
+    if !answers(problem, &state.history, &state.linear, &state.strain) {
+        state.linear.invalidate();
+    }
 }
 
 /// Writes into `out` the state `state` with its unknowns at its own strain: a copy when

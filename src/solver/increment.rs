@@ -129,7 +129,7 @@ fn solve_from(
     let numeric = ws.factorization.numeric();
     let before = (numeric.count, numeric.lu_count, numeric.lblt_count);
     trial.copy_from(committed);
-    trial.linear.valid = false;
+    trial.linear.invalidate();
     contact::configure(problem, ws);
     if problem.n() == 0
         || (problem.disc.interfaces.is_empty() && problem.predictor.len() == 3 * problem.n())

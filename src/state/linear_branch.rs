@@ -43,13 +43,26 @@ impl LinearBranch {
         *self = LinearBranch::default();
     }
 
+    /// Marks the data not valid, zeroes it and empties its buffers (keeping their
+    /// capacity), so that no stale data is saved with the state: states that mean the
+    /// same have the same bytes.
+    pub fn invalidate(&mut self) {
+        self.valid = false;
+        self.tangent = [0.0; 9];
+        self.szz = [0.0; 3];
+        self.jumps.clear();
+        self.closed.clear();
+        self.unknowns_strain = [0.0; 3];
+    }
+
     /// Copies `other` in place (allocates only when the buffers are too short); the
     /// buffers of data that is not valid are not copied.
     pub fn copy_from(&mut self, other: &LinearBranch) {
-        self.valid = other.valid;
         if !other.valid {
+            self.invalidate();
             return;
         }
+        self.valid = true;
         self.tangent = other.tangent;
         self.szz = other.szz;
         self.jumps.clone_from(&other.jumps);

@@ -350,6 +350,62 @@ mod tests {
         assert_eq!(decode(&bytes, SIZES).unwrap(), s);
     }
 
+    /// Format 6 (0.2.0: format 7 without the fast-path data) loads, with no fast-path
+    /// data, and the same checksum rules.
+    #[test]
+    fn format_6_loads_without_fast_path_data() {
+        #[derive(serde::Serialize)]
+        struct Format6Out<'a> {
+            strain: [f64; 3],
+            unknowns: &'a [f64],
+            history: &'a [f64],
+            sensitivity: &'a Sensitivity,
+            curvature: &'a PathCurvature,
+        }
+        let s = state();
+        let payload = bincode::serialize(&Format6Out {
+            strain: s.strain,
+            unknowns: &s.unknowns,
+            history: &s.history,
+            sensitivity: &s.sensitivity,
+            curvature: &s.curvature,
+        })
+        .unwrap();
+        let mut bytes = encode(&s, SIZES).unwrap();
+        bytes.truncate(HEADER);
+        bytes[8..12].copy_from_slice(&6u32.to_le_bytes());
+        bytes[32..40].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        let sum = crc32c::crc32c(&bytes);
+        bytes.extend_from_slice(&sum.to_le_bytes());
+        let loaded = decode(&bytes, SIZES).unwrap();
+        assert_eq!(loaded, s, "the same state, no fast-path data");
+        assert!(!loaded.linear.valid);
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        assert!(matches!(decode(&bytes, SIZES), Err(Error::BadState { .. })));
+    }
+
+    /// Fast-path data round-trips, and data of inconsistent sizes is refused.
+    #[test]
+    fn fast_path_data_round_trips() {
+        let mut s = state();
+        s.linear.valid = true;
+        s.linear.tangent = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0];
+        s.linear.szz = [0.1, 0.2, 0.3];
+        s.linear.jumps = (0..12).map(|i| i as f32 * 0.5).collect();
+        s.linear.closed = vec![true, false];
+        s.linear.unknowns_strain = [1e-4, 0.0, 0.0];
+        let bytes = encode(&s, SIZES).unwrap();
+        assert_eq!(decode(&bytes, SIZES).unwrap(), s);
+        s.linear.jumps.pop();
+        let bytes = encode(&s, SIZES).unwrap();
+        assert!(matches!(decode(&bytes, SIZES), Err(Error::BadState { .. })));
+        s.linear.jumps.push(f32::NAN);
+        let bytes = encode(&s, SIZES).unwrap();
+        assert!(matches!(decode(&bytes, SIZES), Err(Error::BadState { .. })));
+    }
+
     /// Each refusal is its own typed error, naming what it found.
     #[test]
     fn refusals_are_typed() {
