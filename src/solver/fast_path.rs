@@ -142,12 +142,13 @@ pub fn build(
     }
 }
 
-/// Writes into `out` the state `state` with its unknowns at its own strain: a copy when
+/// Writes into `out` the state `state` (without its fast-path data) with its unknowns at
+/// its own strain: a copy when
 /// they are current, else `x = x_a - K_b^-1 R(x_a; eps)` from the unknowns `x_a` at the
 /// anchor, with `K_b` assembled there on the held branch set (one factorization; the
 /// workspace's evaluation and factors are overwritten).
 pub fn materialize(problem: &Problem, state: &State, out: &mut State, ws: &mut Workspace) -> Result<()> {
-    out.copy_from(state);
+    out.copy_solution_from(state);
     if state.unknowns_are_current() {
         return Ok(());
     }
@@ -173,6 +174,5 @@ pub fn materialize(problem: &Problem, state: &State, out: &mut State, ws: &mut W
     ws.dx.iter_mut().zip(&ws.current.r).for_each(|(d, r)| *d = -r);
     ws.factorization.solve(problem.linear, &mut ws.dx, 1);
     out.unknowns.iter_mut().zip(&ws.dx).for_each(|(x, d)| *x += d);
-    out.linear.unknowns_strain = state.strain;
     Ok(())
 }

@@ -128,8 +128,7 @@ fn solve_from(
 ) -> Result<Solved> {
     let numeric = ws.factorization.numeric();
     let before = (numeric.count, numeric.lu_count, numeric.lblt_count);
-    trial.copy_from(committed);
-    trial.linear.invalidate();
+    trial.copy_solution_from(committed);
     contact::configure(problem, ws);
     if problem.n() == 0
         || (problem.disc.interfaces.is_empty() && problem.predictor.len() == 3 * problem.n())
@@ -194,16 +193,22 @@ fn solve_from(
 
 /// On linear branches only (no loading point at the converged iterate) the equilibrium is
 /// linear, `K_b x + G eps = 0`, and one correction with the exact `K_b` solves it to
-/// round-off. Made after every such increment, whatever iterate its loop stopped at
-/// within the tolerance (the predictor itself, a chord step): the update then returns
+/// round-off. Made after every such increment whose loop stopped within the tolerance at
+/// an iterate not reached with the factors of `K_b` (the predictor itself, a chord step
+/// with an older tangent): the update then returns
 /// `x = X_b eps`, the answer of the fast path (`fast_path`), and the factors of `K_b`
 /// are left for the tangent. The corrected iterate is kept when it stays on the branch
 /// set and does not raise the residual. Returns whether it was kept.
 fn polish(problem: &Problem, strain: &Strain, trial: &mut State, ws: &mut Workspace) -> bool {
-    if problem.disc.law.is_none() || ws.current.counts.loading > 0 {
+    // A loop whose last correction used the factors of exactly this `K_b` (every loop
+    // starts with invalidated factors) already solved the linear system.
+    if problem.disc.law.is_none()
+        || ws.current.counts.loading > 0
+        || ws.factorization.factorizes(&ws.current.k)
+    {
         return false;
     }
-    if !ws.factorization.factorizes(&ws.current.k) && problem.factorize(ws, true).is_err() {
+    if problem.factorize(ws, true).is_err() {
         return false;
     }
     ws.dx

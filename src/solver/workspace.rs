@@ -254,8 +254,8 @@ impl Workspace {
             tangent_prediction: zeros(),
             kg_res: vec![0.0; 3 * n],
             history_start: vec![0.0; nh],
-            substep_start: State::virgin(n, nh),
-            materialized: State::virgin(n, nh),
+            substep_start: State::with_capacity(n, nh),
+            materialized: State::with_capacity(n, nh),
             trace: TraceBuffers {
                 f: zeros(),
                 dxf: zeros(),

@@ -205,9 +205,9 @@ impl State {
         !self.linear.valid || self.linear.unknowns_strain == self.strain
     }
 
-    /// Copies `other` into `self` without reallocating (sizes must match), but for the
-    /// quantized buffers the first time they arrive.
-    pub fn copy_from(&mut self, other: &State) {
+    /// [`State::copy_from`] without the fast path's data, which is left not valid (a
+    /// solve's start and trial states need none).
+    pub fn copy_solution_from(&mut self, other: &State) {
         self.strain = other.strain;
         self.unknowns.copy_from_slice(&other.unknowns);
         self.history.copy_from_slice(&other.history);
@@ -216,6 +216,26 @@ impl State {
         self.curvature.valid = other.curvature.valid;
         self.curvature.step = other.curvature.step;
         self.curvature.data.copy_from(&other.curvature.data);
+        self.linear.invalidate();
+    }
+
+    /// A state of `n_unknowns` and `n_history` values whose quantized buffers have the
+    /// capacity of a filled state, so that copies into it allocate nothing (workspaces).
+    pub fn with_capacity(n_unknowns: usize, n_history: usize) -> Self {
+        let mut state = State::virgin(n_unknowns, n_history);
+        let reserve = |q: &mut Quantized, len: usize| {
+            q.values.reserve_exact(len);
+            q.scales.reserve_exact(len.div_ceil(SENSITIVITY_BLOCK));
+        };
+        reserve(&mut state.sensitivity.data, 3 * n_unknowns);
+        reserve(&mut state.curvature.data, n_unknowns);
+        state
+    }
+
+    /// Copies `other` into `self` without reallocating (sizes must match), but for the
+    /// quantized buffers the first time they arrive.
+    pub fn copy_from(&mut self, other: &State) {
+        self.copy_solution_from(other);
         self.linear.copy_from(&other.linear);
     }
 
