@@ -94,8 +94,9 @@ pub fn response(linear: &LinearBranch, strain: &Strain) -> ([f64; 3], f64) {
 
 /// After a full update that converged at `state` (the trial, at its strain) with the
 /// consistent tangent `tangent`, its `s_zz` row `szz` and `K^-1 G` in the workspace's
-/// factorization: fills `state.linear` when every interface point is on a linear branch,
-/// `K^-1 G` is exact for the converged tangent, and the check passes at the state itself;
+/// factorization: fills `state.linear` when every interface point is on a linear branch
+/// with the contact status its gap gives (none held against it), `K^-1 G` is exact for
+/// the converged tangent, and the check passes at the state itself;
 /// otherwise marks it not valid. Allocates only the first time an instance's state holds
 /// the data.
 pub fn build(
@@ -131,6 +132,12 @@ pub fn build(
     problem
         .disc
         .for_each_jump(&state.unknowns, |q, jump| closed[q] = law.is_closed(jump));
+    // `K_b` was assembled with the held contact status: it must be the gaps' (no point
+    // held against its gap, see `contact`).
+    if ws.contact.status().is_some_and(|held| held != closed.as_slice()) {
+        state.linear.invalidate();
+        return;
+    }
     linear.tangent = tangent;
     linear.szz = szz;
     linear.unknowns_strain = state.strain;
