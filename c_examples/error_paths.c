@@ -121,6 +121,7 @@ int main(int argc, char **argv) {
     EXPECT(rve_update(h, eps, NULL, d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update(h, eps, sig, NULL, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_state_size(h, NULL), RVE_STATUS_NULL_ARGUMENT);
+    EXPECT(rve_fast_updates(h, NULL), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_state_load(h, NULL, 10), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_path_len(h, NULL), RVE_STATUS_NULL_ARGUMENT);
     EXPECT(rve_update_batch(NULL, 2, strains, stresses, tangents, statuses,
@@ -150,6 +151,14 @@ int main(int argc, char **argv) {
     EXPECT(rve_update(0, eps, sig, d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_BAD_HANDLE);
     EXPECT(rve_update(12345, eps, sig, d, RVE_TANGENT_REQUEST_CONSISTENT), RVE_STATUS_BAD_HANDLE);
     EXPECT(rve_commit(-1), RVE_STATUS_BAD_HANDLE);
+    {
+        uint64_t count = 77;
+        EXPECT(rve_fast_updates(0, &count), RVE_STATUS_BAD_HANDLE);
+        if (count != 77) {
+            fprintf(stderr, "rve_fast_updates wrote its output on failure\n");
+            return 1;
+        }
+    }
     EXPECT(rve_init_file(path, &freed), RVE_STATUS_OK);
     EXPECT(rve_free(freed), RVE_STATUS_OK);
     EXPECT(rve_free(freed), RVE_STATUS_BAD_HANDLE);

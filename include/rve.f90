@@ -122,7 +122,7 @@ module rve
   ! ---- bind(C) interfaces: one per function of include/rve.h, in the header's order ----
   public :: rve_update_batch, rve_last_error, rve_init, rve_init_file, rve_init_text, &
       rve_clone_model, rve_update_ex, rve_update, rve_commit, rve_revert, rve_reset, &
-      rve_free, rve_state_size, rve_state_save, rve_state_load, rve_write_vtk, rve_path_len, &
+      rve_free, rve_fast_updates, rve_state_size, rve_state_save, rve_state_load, rve_write_vtk, rve_path_len, &
       rve_path_point, rve_model_builds, rve_status_message, rve_umat, rve_version, &
       rve_version_number, rve_abi_version
 
@@ -245,6 +245,14 @@ module rve
     end function rve_free
 
     ! Bytes that rve_state_save needs now (depends on the state: query before each save).
+    ! Updates of the instance answered without an RVE solve (fast path, repeats).
+    function rve_fast_updates(h, count) bind(c, name="rve_fast_updates") result(status)
+      import :: c_int64_t, c_int32_t
+      integer(c_int64_t), value, intent(in) :: h
+      integer(c_int64_t), intent(inout) :: count
+      integer(c_int32_t) :: status
+    end function rve_fast_updates
+
     function rve_state_size(h, size) bind(c, name="rve_state_size") result(status)
       import :: c_int64_t, c_size_t, c_int32_t
       integer(c_int64_t), value, intent(in) :: h
