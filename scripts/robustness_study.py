@@ -123,6 +123,8 @@ class Result:
         self.past_peak = next((k + 1 for k in range(len(norms) - 1) if norms[k + 1] < norms[k]), len(rows))
         # Increments ending with interface points held against their gap.
         self.held = sum(1 for r in rows if int(r["held_points"]) > 0)
+        # Increments answered without a solve (the fast path, `fast` column).
+        self.fast = sum(int(r.get("fast", "0")) for r in rows)
 
 
 def run_all(work):
@@ -197,10 +199,12 @@ def write(results):
     w("Newton iteration (`solver.contact_status = \"active_set\"`, the default, see")
     w("`docs/contact-algorithm.md`); *paper, per iteration*, the same law with the status read")
     w("at every evaluation (the behaviour before the active set); *cohesive*,")
-    w("`contact_shear = \"cohesive\"`.\n")
+    w("`contact_shear = \"cohesive\"`. *Answered by the fast path*: increments whose every ITZ")
+    w("point stayed on the linear branch of the last full solve (unloading, contact), answered")
+    w("as `D_b eps` without Newton (`solver.fast_path`, `docs/fast_path.md`).\n")
     w("## Summary\n")
-    w("| group | contact law | runs | completed | failed | slow increments | iterations | factorizations | solver time (s) | mean ms per increment | slowest increment (ms) | snap-back increments | factorizations per snap-back increment: median / max | increments ending with held points |")
-    w("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    w("| group | contact law | runs | completed | failed | slow increments | iterations | factorizations | solver time (s) | mean ms per increment | slowest increment (ms) | snap-back increments | factorizations per snap-back increment: median / max | increments ending with held points | answered by the fast path |")
+    w("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     groups = []
     for g, _, _, _ in results:
         if g not in groups:
@@ -220,7 +224,7 @@ def write(results):
                 f"{ms(sum(r.seconds for r in sel) / max(incs, 1))} | "
                 f"{ms(max(r.worst_seconds for r in sel))} | {len(snaps)} | "
                 + (f"{statistics.median(snaps):.0f} / {max(snaps)} |" if snaps else "- |")
-                + f" {sum(r.held for r in sel)} |"
+                + f" {sum(r.held for r in sel)} | {sum(r.fast for r in sel)} of {incs} |"
             )
     diffs = differences(results)
     w("\n## Active set against per iteration, where the per-iteration run completes\n")

@@ -1013,4 +1013,60 @@ mod tests {
             );
         }
     }
+
+    /// `stays_linear` is conservative: wherever it holds for a jump and an error box, every
+    /// jump of the box (corners and centre) evaluates on a branch that is not loading, with
+    /// the contact status asked for, the history unchanged and the traction linear through
+    /// the origin (`t = C delta` with the branch's constant tangent). It refuses the
+    /// boundaries: `delta = delta_max`, `delta_n = 0` for a closed status, a box straddling
+    /// a boundary, a virgin open point, and non-finite jumps.
+    #[test]
+    fn stays_linear_is_conservative() {
+        let mut checked = 0;
+        for contact_shear in [ContactShear::Penalty, ContactShear::Cohesive] {
+            for contact in [true, false] {
+                let l = CohesiveLaw {
+                    contact_shear,
+                    ..law(contact)
+                };
+                for dm in [0.0, 0.5 * DC, 3.0 * DC] {
+                    let h = loaded_to(dm);
+                    for i in -6..=6 {
+                        for k in -6..=6 {
+                            let jump = [0.4 * DC * f64::from(i), 0.3 * DC * f64::from(k)];
+                            let error = [1e-3 * DC, 2e-3 * DC];
+                            for closed in [true, false] {
+                                if !l.stays_linear(&[dm], jump, error, closed) {
+                                    continue;
+                                }
+                                for (a, b) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0), (0.0, 0.0)] {
+                                    let j = [jump[0] + a * error[0], jump[1] + b * error[1]];
+                                    let p = l.evaluate(&h, j, LEN);
+                                    assert_ne!(p.branch, Branch::Loading, "{j:?} {dm}");
+                                    assert_eq!(l.is_closed(j), closed && contact, "{j:?}");
+                                    assert_eq!(p.history, h);
+                                    let linear = p.tangent * Vector2::new(j[0], j[1]);
+                                    assert!((linear - p.traction).norm() <= 1e-12 * p.traction.norm());
+                                    checked += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} jumps checked");
+        let l = law(true);
+        let h = [2.0 * DC];
+        let boundary = 2.0 * DC / 0.707;
+        assert!(l.stays_linear(&h, [0.99 * boundary, 0.0], [0.0; 2], false));
+        assert!(!l.stays_linear(&h, [boundary, 0.0], [0.0; 2], false), "delta = delta_max");
+        assert!(!l.stays_linear(&h, [0.99 * boundary, 0.0], [0.02 * boundary, 0.0], false));
+        assert!(!l.stays_linear(&h, [0.0, 0.0], [0.0; 2], true), "delta_n = 0 is open");
+        assert!(l.stays_linear(&h, [0.0, 0.0], [0.0; 2], false));
+        assert!(!l.stays_linear(&h, [0.0, -1e-9], [0.0, 2e-9], true), "box straddles the gap");
+        assert!(!l.stays_linear(&[0.0], [1e-9, 1e-9], [0.0; 2], false), "virgin open point");
+        assert!(!l.stays_linear(&h, [f64::NAN, 0.0], [0.0; 2], false));
+        assert!(!l.stays_linear(&h, [0.0, f64::NAN], [0.0; 2], true));
+    }
 }
