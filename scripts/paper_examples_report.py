@@ -396,10 +396,13 @@ def section_5_2_1():
         snap = [k + 1 for k in range(len(r)) if r[k + 1]["limit_points"] > 0]
         slow_smooth = sum(1 for k in range(len(r)) if its[k] > 4 and k + 1 not in snap)
         worst = max(range(len(its)), key=lambda k: its[k])
+        fast = sum(r.col("fast")) if "fast" in r[1] else 0
         rows.append([label, len(r), sum(1 for i in its if i <= 4), ", ".join(map(str, snap)) or "none",
-                     slow_smooth, f"{its[worst]:.0f} (increment {worst + 1})", f0(max(r.col("substeps")))])
+                     slow_smooth, f"{its[worst]:.0f} (increment {worst + 1})", f0(max(r.col("substeps"))),
+                     f0(fast)])
     table(["path", "increments", "with <= 4 iterations", "snap-back (limit points) at increment",
-           "slower than 4 without a snap-back", "most iterations", "most substeps"], rows)
+           "slower than 4 without a snap-back", "most iterations", "most substeps",
+           "answered by the fast path (0 iterations)"], rows)
     finding(
         "5.2.2 (end)",
         "up to four Newton iterations per increment, quadratic convergence.",

@@ -194,6 +194,37 @@ fn section_5_2_2_cycle_fast_versus_full() {
     }
 }
 
+/// From an unloaded state of the cycle (fast-path data valid): a strain inside the branch
+/// set is answered fast; reloading past the old peak (points load) and a jump into
+/// compression (cracks close) fall back to the full solve.
+#[test]
+fn leaving_the_branch_set_falls_back_to_the_full_solve() {
+    let scene = common::scene("scenes/paper_rve_cycle.toml");
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws = model.workspace();
+    let mut inst = Instance::new(model.clone());
+    for &eps in &rve::scene::path_points(&scene.spec.path)[..25] {
+        inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+        inst.commit().unwrap();
+    }
+    assert!(inst.committed().linear.valid);
+    let mut answer = |eps: [f64; 3]| {
+        let r = inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+        inst.revert();
+        r.report
+    };
+    let inside = answer([1.0e-4, 0.0, 0.0]);
+    assert_eq!(inside.answer, Answer::FastPath);
+    let beyond = answer([2.6e-4, 0.0, 0.0]);
+    assert_eq!(beyond.answer, Answer::Solved);
+    assert!(beyond.loading > 0, "{beyond:?}");
+    let closed = answer([-1.0e-4, 0.0, 0.0]);
+    assert_eq!(closed.answer, Answer::Solved);
+    assert!(closed.contact > inside.contact, "{closed:?}");
+    // The refused trials changed nothing: inside is still fast.
+    assert_eq!(answer([1.0e-4, 0.0, 0.0]).answer, Answer::FastPath);
+}
+
 /// A repeated call returns the pending trial, bit for bit, and counts as fast; a commit
 /// in between ends the repeat.
 #[test]
