@@ -66,26 +66,33 @@ fn main() {
     let mut inst = Instance::new(fast_model.clone());
     let mut full = Instance::new(full_model.clone());
 
-    println!("| increment | strain eps_xx | answer | fast path (us) | full solve (us) | full / fast |");
+    println!(
+        "| increment | strain eps_xx | answer | fast path (us) | full solve (us) | full / fast |"
+    );
     println!("|---|---|---|---|---|---|");
     let (mut fast_times, mut full_times, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
     let mut state_28 = None;
     let mut dropped = 0;
     for (k, &eps) in targets.iter().enumerate() {
-        let r = inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+        let r = inst
+            .update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
         inst.revert();
         if k >= 21 && r.report.answer == Answer::FastPath {
             // The same state for the full solve, with its unknowns formed.
             let current = fast_model.current_state(inst.committed()).unwrap();
-            full.load_state(&persist::encode(&current, sizes).unwrap()).unwrap();
+            full.load_state(&persist::encode(&current, sizes).unwrap())
+                .unwrap();
             let (mut tf, mut ts) = (Vec::new(), Vec::new());
             for _ in 0..5 {
                 tf.push(time(200, || {
-                    inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+                    inst.update(eps, &mut ws, TangentRequest::Consistent)
+                        .unwrap();
                     inst.revert();
                 }));
                 ts.push(time(5, || {
-                    full.update(eps, &mut ws_full, TangentRequest::Consistent).unwrap();
+                    full.update(eps, &mut ws_full, TangentRequest::Consistent)
+                        .unwrap();
                     full.revert();
                 }));
             }
@@ -105,7 +112,8 @@ fn main() {
             dropped += 1;
             println!("| {} | {:.3e} | solved | | | |", k + 1, eps[0]);
         }
-        inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+        inst.update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
         inst.commit().unwrap();
         if k + 1 == 28 {
             state_28 = Some(inst.save_state().unwrap());
@@ -119,9 +127,18 @@ fn main() {
         fast_times.len(),
         fast_times.len() + dropped
     );
-    println!("| fast path, median update | {:.2} us |", 1e6 * median(&mut fast_times));
-    println!("| full solve, median update | {:.0} us |", 1e6 * median(&mut full_times));
-    println!("| full / fast, median of the per-increment ratios | {:.0} |", median(&mut ratios));
+    println!(
+        "| fast path, median update | {:.2} us |",
+        1e6 * median(&mut fast_times)
+    );
+    println!(
+        "| full solve, median update | {:.0} us |",
+        1e6 * median(&mut full_times)
+    );
+    println!(
+        "| full / fast, median of the per-increment ratios | {:.0} |",
+        median(&mut ratios)
+    );
 
     // 2. Memory of N instances in the fast steady state.
     let n: usize = std::env::var("MESORVE_BENCH_INSTANCES")

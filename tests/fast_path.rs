@@ -57,7 +57,9 @@ fn residual_with_gaps(model: &Model, x: &[f64], eps: &[f64; 3], history: &[f64])
     };
     let mut trial = history.to_vec();
     let mut r = vec![0.0; x.len()];
-    let counts = model.disc.evaluate(x, eps, history, &mut trial, &mut r, None);
+    let counts = model
+        .disc
+        .evaluate(x, eps, history, &mut trial, &mut r, None);
     assert_eq!(counts.loading, 0, "a loading point at the fast answer");
     assert_eq!(trial, history, "the history moved at the fast answer");
     r.iter().map(|v| v * v).sum::<f64>().sqrt() / problem.reference(eps)
@@ -105,7 +107,10 @@ fn check_path(fast: &Arc<Model>, full: &Arc<Model>, targets: &[[f64; 3]], name: 
             let moved = trial_state(&inst, eps);
             let x = fast.current_state(&moved).unwrap();
             let residual = residual_with_gaps(fast, &x.unknowns, &eps, &inst.committed().history);
-            assert!(residual <= 1e-9, "{at}: fast answer's residual {residual:e}");
+            assert!(
+                residual <= 1e-9,
+                "{at}: fast answer's residual {residual:e}"
+            );
             stats.full_held += 1;
         } else if r.report.answer == Answer::FastPath {
             let stress = common::max_rel_diff(&r.stress, &rf.stress);
@@ -125,7 +130,14 @@ fn check_path(fast: &Arc<Model>, full: &Arc<Model>, targets: &[[f64; 3]], name: 
         } else {
             assert_eq!(bits(&r), bits(&rf), "{at}: solved both ways");
             let left = rf.report.loading > 0
-                || rf.report.contact != inst.committed().linear.closed.iter().filter(|&&c| c).count();
+                || rf.report.contact
+                    != inst
+                        .committed()
+                        .linear
+                        .closed
+                        .iter()
+                        .filter(|&&c| c)
+                        .count();
             if previous_fast && left {
                 stats.fell_back += 1;
             }
@@ -135,8 +147,13 @@ fn check_path(fast: &Arc<Model>, full: &Arc<Model>, targets: &[[f64; 3]], name: 
             println!(
                 "{at}: {:?}; full solve: loading {} unloading {} contact {} held {} \
                  iterations {}; fast-path data before: {}",
-                r.report.answer, rep.loading, rep.unloading, rep.contact, rep.held_points,
-                rep.iterations, inst.committed().linear.valid
+                r.report.answer,
+                rep.loading,
+                rep.unloading,
+                rep.contact,
+                rep.held_points,
+                rep.iterations,
+                inst.committed().linear.valid
             );
         }
         inst.commit().unwrap();
@@ -204,12 +221,15 @@ fn leaving_the_branch_set_falls_back_to_the_full_solve() {
     let mut ws = model.workspace();
     let mut inst = Instance::new(model.clone());
     for &eps in &rve::scene::path_points(&scene.spec.path)[..25] {
-        inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+        inst.update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
         inst.commit().unwrap();
     }
     assert!(inst.committed().linear.valid);
     let mut answer = |eps: [f64; 3]| {
-        let r = inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+        let r = inst
+            .update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
         inst.revert();
         r.report
     };
@@ -234,19 +254,30 @@ fn a_repeated_trial_is_returned_without_a_solve() {
     let mut ws = model.workspace();
     let mut inst = Instance::new(model.clone());
     let eps = [1.2e-4, 0.0, 0.0];
-    let first = inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+    let first = inst
+        .update(eps, &mut ws, TangentRequest::Consistent)
+        .unwrap();
     assert_eq!(first.report.answer, Answer::Solved);
-    let again = inst.update(eps, &mut ws, TangentRequest::Consistent).unwrap();
+    let again = inst
+        .update(eps, &mut ws, TangentRequest::Consistent)
+        .unwrap();
     assert_eq!(again.report.answer, Answer::Repeated);
     assert_eq!(bits(&first), bits(&again));
     assert_eq!(inst.fast_updates(), 1);
     // Another request solves again (a trial without tangent keeps no sensitivity).
     let stress_only = inst.update(eps, &mut ws, TangentRequest::None).unwrap();
     assert_eq!(stress_only.report.answer, Answer::Solved);
-    assert_eq!(stress_only.stress.map(f64::to_bits), first.stress.map(f64::to_bits));
+    assert_eq!(
+        stress_only.stress.map(f64::to_bits),
+        first.stress.map(f64::to_bits)
+    );
     inst.commit().unwrap();
     let after = inst.update(eps, &mut ws, TangentRequest::None).unwrap();
-    assert_ne!(after.report.answer, Answer::Repeated, "a commit ends the repeat");
+    assert_ne!(
+        after.report.answer,
+        Answer::Repeated,
+        "a commit ends the repeat"
+    );
 }
 
 /// The linear interface law (no history, no contact) is linear everywhere: after the
@@ -280,7 +311,11 @@ fn unload_reload_path(rng: &mut ChaCha8Rng) -> Vec<[f64; 3]> {
     let at = |a: f64, shear: f64| [a * dir[0], a * dir[1], a * dir[2] + shear];
     let peak = rng.random_range(2.6e-4..4.0e-4);
     let down = rng.random_range(0.0..0.6) * peak;
-    let shear = if rng.random_bool(0.33) { rng.random_range(-5e-5..5e-5) } else { 0.0 };
+    let shear = if rng.random_bool(0.33) {
+        rng.random_range(-5e-5..5e-5)
+    } else {
+        0.0
+    };
     let compress = -rng.random_range(0.5..1.5) * peak;
     let mut path = Vec::new();
     let mut segment = |from: [f64; 3], to: [f64; 3], n: u32| {
@@ -309,8 +344,16 @@ fn randomized_unload_reload_compress_paths() {
     for case in 0..16 {
         let ellipses = case % 4 == 3;
         let lambda_p = [1e5, 1e7, 1e9][case % 3];
-        let contact_shear = if case % 2 == 0 { ContactShear::Penalty } else { ContactShear::Cohesive };
-        let base = if ellipses { "scenes/paper_rve_ellipses.toml" } else { "scenes/paper_rve.toml" };
+        let contact_shear = if case % 2 == 0 {
+            ContactShear::Penalty
+        } else {
+            ContactShear::Cohesive
+        };
+        let base = if ellipses {
+            "scenes/paper_rve_ellipses.toml"
+        } else {
+            "scenes/paper_rve.toml"
+        };
         let mut scene = common::scene(base);
         let itz = scene.spec.materials.itz.as_mut().expect("the paper's ITZ");
         itz.penalty.lambda_p = Some(lambda_p);

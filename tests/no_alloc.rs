@@ -56,7 +56,11 @@ fn update_and_commit_do_not_allocate() {
             // re-creates the trial state that a fast commit released, and an update that
             // finds a linear branch set may give the fast path's data new buffers.
             if previous_fast || inst.committed().linear.valid {
-                assert!(n <= 8, "increment {}: {n} allocations at a transition", k + 1);
+                assert!(
+                    n <= 8,
+                    "increment {}: {n} allocations at a transition",
+                    k + 1
+                );
                 transitions.push((k + 1, n));
             } else {
                 assert_eq!(n, 0, "increment {}: {n} allocations ({report:?})", k + 1);

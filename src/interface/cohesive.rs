@@ -458,8 +458,7 @@ impl InterfaceLaw for CohesiveLaw {
             return unloading;
         }
         if closed {
-            dn + en < 0.0
-                && (self.contact_shear == ContactShear::Penalty || sliding < delta_max)
+            dn + en < 0.0 && (self.contact_shear == ContactShear::Penalty || sliding < delta_max)
         } else {
             dn - en >= 0.0 && unloading
         }
@@ -1039,14 +1038,22 @@ mod tests {
                                 if !l.stays_linear(&[dm], jump, error, closed) {
                                     continue;
                                 }
-                                for (a, b) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0), (0.0, 0.0)] {
+                                for (a, b) in [
+                                    (-1.0, -1.0),
+                                    (-1.0, 1.0),
+                                    (1.0, -1.0),
+                                    (1.0, 1.0),
+                                    (0.0, 0.0),
+                                ] {
                                     let j = [jump[0] + a * error[0], jump[1] + b * error[1]];
                                     let p = l.evaluate(&h, j, LEN);
                                     assert_ne!(p.branch, Branch::Loading, "{j:?} {dm}");
                                     assert_eq!(l.is_closed(j), closed && contact, "{j:?}");
                                     assert_eq!(p.history, h);
                                     let linear = p.tangent * Vector2::new(j[0], j[1]);
-                                    assert!((linear - p.traction).norm() <= 1e-12 * p.traction.norm());
+                                    assert!(
+                                        (linear - p.traction).norm() <= 1e-12 * p.traction.norm()
+                                    );
                                     checked += 1;
                                 }
                             }
@@ -1060,12 +1067,24 @@ mod tests {
         let h = [2.0 * DC];
         let boundary = 2.0 * DC / 0.707;
         assert!(l.stays_linear(&h, [0.99 * boundary, 0.0], [0.0; 2], false));
-        assert!(!l.stays_linear(&h, [boundary, 0.0], [0.0; 2], false), "delta = delta_max");
+        assert!(
+            !l.stays_linear(&h, [boundary, 0.0], [0.0; 2], false),
+            "delta = delta_max"
+        );
         assert!(!l.stays_linear(&h, [0.99 * boundary, 0.0], [0.02 * boundary, 0.0], false));
-        assert!(!l.stays_linear(&h, [0.0, 0.0], [0.0; 2], true), "delta_n = 0 is open");
+        assert!(
+            !l.stays_linear(&h, [0.0, 0.0], [0.0; 2], true),
+            "delta_n = 0 is open"
+        );
         assert!(l.stays_linear(&h, [0.0, 0.0], [0.0; 2], false));
-        assert!(!l.stays_linear(&h, [0.0, -1e-9], [0.0, 2e-9], true), "box straddles the gap");
-        assert!(!l.stays_linear(&[0.0], [1e-9, 1e-9], [0.0; 2], false), "virgin open point");
+        assert!(
+            !l.stays_linear(&h, [0.0, -1e-9], [0.0, 2e-9], true),
+            "box straddles the gap"
+        );
+        assert!(
+            !l.stays_linear(&[0.0], [1e-9, 1e-9], [0.0; 2], false),
+            "virgin open point"
+        );
         assert!(!l.stays_linear(&h, [f64::NAN, 0.0], [0.0; 2], false));
         assert!(!l.stays_linear(&h, [0.0, f64::NAN], [0.0; 2], true));
     }

@@ -114,7 +114,13 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
     /// `S`, and an RVE whose points all stay so is linear in the macro strain (the fast
     /// path of `solver::fast_path`). `false` when in doubt; the default (a law that does
     /// not say) is always `false`, so the fast path never answers for it.
-    fn stays_linear(&self, _history: &[f64], _jump: [f64; 2], _error: [f64; 2], _closed: bool) -> bool {
+    fn stays_linear(
+        &self,
+        _history: &[f64],
+        _jump: [f64; 2],
+        _error: [f64; 2],
+        _closed: bool,
+    ) -> bool {
         false
     }
 

@@ -39,7 +39,13 @@ impl InterfaceLaw for LinearInterface {
     }
 
     /// Always: the law is linear and has no history.
-    fn stays_linear(&self, _history: &[f64], _jump: [f64; 2], _error: [f64; 2], _closed: bool) -> bool {
+    fn stays_linear(
+        &self,
+        _history: &[f64],
+        _jump: [f64; 2],
+        _error: [f64; 2],
+        _closed: bool,
+    ) -> bool {
         true
     }
 }

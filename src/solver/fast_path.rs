@@ -134,7 +134,11 @@ pub fn build(
         .for_each_jump(&state.unknowns, |q, jump| closed[q] = law.is_closed(jump));
     // `K_b` was assembled with the held contact status: it must be the gaps' (no point
     // held against its gap, see `contact`).
-    if ws.contact.status().is_some_and(|held| held != closed.as_slice()) {
+    if ws
+        .contact
+        .status()
+        .is_some_and(|held| held != closed.as_slice())
+    {
         state.linear.invalidate();
         return;
     }
@@ -154,7 +158,12 @@ pub fn build(
 /// they are current, else `x = x_a - K_b^-1 R(x_a; eps)` from the unknowns `x_a` at the
 /// anchor, with `K_b` assembled there on the held branch set (one factorization; the
 /// workspace's evaluation and factors are overwritten).
-pub fn materialize(problem: &Problem, state: &State, out: &mut State, ws: &mut Workspace) -> Result<()> {
+pub fn materialize(
+    problem: &Problem,
+    state: &State,
+    out: &mut State,
+    ws: &mut Workspace,
+) -> Result<()> {
     out.copy_solution_from(state);
     if state.unknowns_are_current() {
         return Ok(());
@@ -178,8 +187,14 @@ pub fn materialize(problem: &Problem, state: &State, out: &mut State, ws: &mut W
         depth: 0,
         suggested_step_ratio: 0.5,
     })?;
-    ws.dx.iter_mut().zip(&ws.current.r).for_each(|(d, r)| *d = -r);
+    ws.dx
+        .iter_mut()
+        .zip(&ws.current.r)
+        .for_each(|(d, r)| *d = -r);
     ws.factorization.solve(problem.linear, &mut ws.dx, 1);
-    out.unknowns.iter_mut().zip(&ws.dx).for_each(|(x, d)| *x += d);
+    out.unknowns
+        .iter_mut()
+        .zip(&ws.dx)
+        .for_each(|(x, d)| *x += d);
     Ok(())
 }

@@ -26,9 +26,9 @@
 
 use super::arclength::{trace, StrainLine, Traced};
 use super::contact;
+use super::fast_path;
 use super::newton::{newton, Failure, Mode};
 use super::predictor::{predict, store_curvature, Prediction, StrainStep};
-use super::fast_path;
 use super::problem::{accept_candidate, norm, sensitivity_times, Problem, Strain};
 use super::settings::{IncrementReport, Settings, TangentRequest};
 use super::tangent::{condensed, condensed_tangent};
@@ -217,8 +217,7 @@ fn polish(problem: &Problem, strain: &Strain, trial: &mut State, ws: &mut Worksp
         *t = x + d;
     }
     problem.evaluate_candidate(strain, TangentKind::Consistent, ws);
-    let same_branches =
-        ws.candidate.counts.branch_signature == ws.current.counts.branch_signature;
+    let same_branches = ws.candidate.counts.branch_signature == ws.current.counts.branch_signature;
     if !(same_branches && norm(&ws.candidate.r) <= norm(&ws.current.r)) {
         return false;
     }
