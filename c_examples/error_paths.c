@@ -77,6 +77,9 @@ static void *hammer_run(void *arg) {
     double eps[3] = {3e-5, 0.0, 0.0}, sig[3];
     int i;
     for (i = 0; i < 200 && !hm->busy; i++) {
+        /* A new strain at every call: a trial repeated at the same strain is returned
+         * without a solve, too short for the two threads to meet. */
+        eps[0] = 3e-5 * (1.0 + 1e-3 * i);
         uint32_t st = rve_update(hm->h, eps, sig, NULL, RVE_TANGENT_REQUEST_NONE);
         if (st == RVE_STATUS_OK)
             hm->ok++;
