@@ -618,6 +618,14 @@ int main(int argc, char **argv) {
     fflush(stdout);
     if (analyse(&fast, scene, NULL, weak, base, scale) ||
         analyse(&slow, scene, off, weak_off, base, scale)) {
+        const Run *run = slow.nsteps ? &slow : &fast;
+        printf("the run %s the fast path stopped; its converged steps:\n",
+               run == &slow ? "without" : "with");
+        for (i = 0; i < run->nsteps; i++)
+            printf("%-11s %4d  U %11.4e  F %10.4f  eps band %9.3e  rest %9.3e  it %d  cuts %d\n",
+                   phase_name[run->steps[i].phase], i + 1, run->steps[i].u, run->steps[i].f,
+                   run->steps[i].eps_band, run->steps[i].eps_rest, run->steps[i].iterations,
+                   run->steps[i].cuts);
         failures = 1;
         goto done;
     }
@@ -709,6 +717,7 @@ int main(int argc, char **argv) {
     printf("largest difference of the curves: U %.1e of max |U| = %.4e mm, F %.1e of max |F| = "
            "%.4f N (limit %.0e)\n",
            diff_u, u_scale, diff_f, f_scale, CURVE_TOL);
+    fflush(stdout);
     if (!(diff_f <= CURVE_TOL && diff_u <= CURVE_TOL)) {
         fprintf(stderr, "localize: the curves differ by more than %.0e\n", CURVE_TOL);
         failures++;
