@@ -33,16 +33,16 @@
  * softens continuously (slope above -6e3 N/mm^2 under a uniaxial stress), and with the
  * band a third of the strip the strip's response has no snap-back.
  *
- * Printed: the load-displacement curves of both runs and their largest differences
- * (relative to the largest |F| and |U|), the mean eps_xx of the band and of the rest, the
- * share of rve_update calls answered without a solve (rve_fast_updates), and the wall time
- * spent inside rve_update (clock_gettime around each call) per run, per phase, per fast
- * answer and per solve. Exit 1 when a step cannot be solved, the runs take different
- * steps, the curves differ by more than CURVE_TOL (1e-10), no update is answered by the
- * fast path, rve_fast_updates disagrees with the updates seen answered without a solve
- * (or counts any in the run without the fast path), or the band does not localize (no
- * force drop after the first peak of the tension with the band stretching and the rest
- * contracting).
+ * Printed: the load-displacement curves of both runs and their largest differences in F
+ * and in the band's strain (relative to their largest values), the mean eps_xx of the
+ * band and of the rest, the share of rve_update calls answered without a solve
+ * (rve_fast_updates), and the wall time spent inside rve_update (clock_gettime around
+ * each call) per run, per phase, per fast answer and per solve. Exit 1 when a step cannot
+ * be solved, the runs take different steps, F or the band's strain differ by more than
+ * CURVE_TOL (1e-10), no update is answered by the fast path, rve_fast_updates disagrees
+ * with the updates seen answered without a solve (or counts any in the run without the
+ * fast path), or the band does not localize (no force drop after the first peak of the
+ * tension with the band stretching and the rest contracting).
  *
  * Usage: localize [SCENE.toml [SCALE [REPEATS]]]
  *   SCENE    default scenes/paper_rve_host_ductile.toml; must have materials.itz.sigma_c
@@ -560,21 +560,22 @@ static int localized(const Run *run, int *peak, int *low) {
            run->steps[*low].eps_rest < run->steps[*peak].eps_rest;
 }
 
-/* The largest differences of run b's curve from run a's (relative to a's largest |U|
- * and |F|); 1 when they took other steps. */
-static int compare(const Run *a, const Run *b, double *du, double *df) {
+/* The largest differences of run b from run a in the force and in the band's strain
+ * (relative to a's largest |F| and |eps_band|); 1 when they took other steps. */
+static int compare(const Run *a, const Run *b, double *de, double *df) {
     int i;
-    double u_scale = 0.0, f_scale = 0.0;
-    *du = *df = 0.0;
+    double e_scale = 0.0, f_scale = 0.0;
+    *de = *df = 0.0;
     for (i = 0; i < a->nsteps; i++) {
         if (fabs(a->steps[i].f) > f_scale) f_scale = fabs(a->steps[i].f);
-        if (fabs(a->steps[i].u) > u_scale) u_scale = fabs(a->steps[i].u);
+        if (fabs(a->steps[i].eps_band) > e_scale) e_scale = fabs(a->steps[i].eps_band);
     }
-    if (a->nsteps != b->nsteps || f_scale == 0.0 || u_scale == 0.0) return 1;
+    if (a->nsteps != b->nsteps || f_scale == 0.0 || e_scale == 0.0) return 1;
     for (i = 0; i < a->nsteps; i++) {
         const Step *x = &a->steps[i], *y = &b->steps[i];
         if (x->phase != y->phase || x->target != y->target) return 1;
-        if (rel(x->u, y->u, u_scale) > *du) *du = rel(x->u, y->u, u_scale);
+        if (rel(x->eps_band, y->eps_band, e_scale) > *de)
+            *de = rel(x->eps_band, y->eps_band, e_scale);
         if (rel(x->f, y->f, f_scale) > *df) *df = rel(x->f, y->f, f_scale);
     }
     return 0;
@@ -586,7 +587,7 @@ int main(int argc, char **argv) {
     int failures = 0, i, p, r, peak, low, loc, all_fast = 0;
     char *text = NULL, *weak = NULL, *off = NULL, *weak_off = NULL, *base = NULL;
     static Run fast, slow, again[2];
-    double diff_f = 0.0, diff_u = 0.0, f_scale = 0.0, u_scale = 0.0, share;
+    double diff_f = 0.0, diff_e = 0.0, f_scale = 0.0, e_scale = 0.0, share;
     double t_all_fast = 0.0, t_all_fast_off = 0.0, min_fast, min_off;
     verbose = getenv("LOCALIZE_VERBOSE") != NULL;
     if (scale < 1 || repeats < 1 || argc > 4) {
@@ -633,15 +634,15 @@ int main(int argc, char **argv) {
     min_off = slow.rve_seconds;
     if (repeats > 1) printf("time in rve_update (s), fast / off:  %.3f / %.3f", min_fast, min_off);
     for (r = 1; r < repeats; r++) { /* alternate the order; every run must give the same curve */
-        double du, df;
+        double de, df;
         Run *f = &again[r % 2], *o = &again[1 - r % 2];
         memset(again, 0, sizeof again);
         if (analyse(&again[0], scene, r % 2 ? off : NULL, r % 2 ? weak_off : weak, base, scale) ||
             analyse(&again[1], scene, r % 2 ? NULL : off, r % 2 ? weak : weak_off, base, scale)) {
             failures = 1;
         } else {
-            if (compare(&fast, f, &du, &df) || du > CURVE_TOL || df > CURVE_TOL ||
-                compare(&fast, o, &du, &df) || du > CURVE_TOL || df > CURVE_TOL) {
+            if (compare(&fast, f, &de, &df) || de > CURVE_TOL || df > CURVE_TOL ||
+                compare(&fast, o, &de, &df) || de > CURVE_TOL || df > CURVE_TOL) {
                 fprintf(stderr, "\nlocalize: repeat %d: another curve\n", r + 1);
                 failures++;
             }
@@ -654,14 +655,14 @@ int main(int argc, char **argv) {
         if (failures) goto done;
     }
     if (repeats > 1) printf("\n");
-    if (compare(&fast, &slow, &diff_u, &diff_f)) {
+    if (compare(&fast, &slow, &diff_e, &diff_f)) {
         fprintf(stderr, "localize: the runs took different steps (%d and %d)\n", fast.nsteps,
                 slow.nsteps);
         failures++;
     }
     for (i = 0; i < fast.nsteps; i++) {
         if (fabs(fast.steps[i].f) > f_scale) f_scale = fabs(fast.steps[i].f);
-        if (fabs(fast.steps[i].u) > u_scale) u_scale = fabs(fast.steps[i].u);
+        if (fabs(fast.steps[i].eps_band) > e_scale) e_scale = fabs(fast.steps[i].eps_band);
     }
     printf("\n%-11s %4s %11s %10s %10s %8s %9s %9s %5s %10s %13s\n", "phase", "step", "U (mm)",
            "F (N)", "F off (N)", "dF/Fmax", "eps band", "eps rest", "it", "fast/upd",
@@ -714,11 +715,11 @@ int main(int argc, char **argv) {
                fast.steps[peak].eps_band, fast.steps[low].eps_band, fast.steps[peak].eps_rest,
                fast.steps[low].eps_rest);
     printf("F at U = 0 after the unloading: %.1e N\n", fast.f_zero);
-    printf("largest difference of the curves: U %.1e of max |U| = %.4e mm, F %.1e of max |F| = "
-           "%.4f N (limit %.0e)\n",
-           diff_u, u_scale, diff_f, f_scale, CURVE_TOL);
+    printf("largest difference of the runs: F %.1e of max |F| = %.4f N, band eps_xx %.1e of its "
+           "max %.3e (limit %.0e)\n",
+           diff_f, f_scale, diff_e, e_scale, CURVE_TOL);
     fflush(stdout);
-    if (!(diff_f <= CURVE_TOL && diff_u <= CURVE_TOL)) {
+    if (!(diff_f <= CURVE_TOL && diff_e <= CURVE_TOL)) {
         fprintf(stderr, "localize: the curves differ by more than %.0e\n", CURVE_TOL);
         failures++;
     }
