@@ -115,6 +115,12 @@ typedef struct {
     uint64_t fast_total;
 } Run;
 
+/* Times inside rve_update summed over runs of one kind. */
+typedef struct {
+    double phase[NPHASE], all, fast, solved, steps_all_fast;
+    unsigned long n_fast, updates;
+} Times;
+
 static int verbose;
 
 static int report(uint32_t st, const char *what) {
@@ -544,6 +550,21 @@ out:
 
 static double rel(double a, double b, double scale) { return fabs(a - b) / scale; }
 
+/* Adds a run's times; steps_all_fast: over the steps the fast run `ref` (of the same
+ * pair, on the same steps) answered entirely without a solve. */
+static void add_times(Times *t, const Run *run, const Run *ref) {
+    int i, p;
+    for (p = 0; p < NPHASE; p++) t->phase[p] += run->rve_phase[p];
+    t->all += run->rve_seconds;
+    t->fast += run->t_fast;
+    t->solved += run->t_solved;
+    t->n_fast += run->n_fast;
+    t->updates += run->updates;
+    for (i = 0; i < run->nsteps && i < ref->nsteps; i++)
+        if (ref->steps[i].fast == ref->steps[i].updates)
+            t->steps_all_fast += run->steps[i].rve_seconds;
+}
+
 /* Localization in the tension of a run: the first peak of the force (a step followed by
  * a lower force) and the end of the fall after it (the next step followed by a higher
  * force, or the last step of the tension). Returns 1 when the force falls after the peak
@@ -589,8 +610,9 @@ int main(int argc, char **argv) {
     int failures = 0, i, p, r, peak, low, loc, all_fast = 0;
     char *text = NULL, *weak = NULL, *off = NULL, *weak_off = NULL, *base = NULL;
     static Run fast, slow, again[2];
+    static Times tf, to;
     double diff_f = 0.0, diff_e = 0.0, f_scale = 0.0, e_scale = 0.0, share;
-    double t_all_fast = 0.0, t_all_fast_off = 0.0, min_fast, min_off;
+    double min_fast, min_off;
     verbose = getenv("LOCALIZE_VERBOSE") != NULL;
     if (scale < 1 || repeats < 1 || argc > 4) {
         fprintf(stderr, "usage: localize [SCENE.toml [SCALE >= 1 [REPEATS >= 1]]]\n");
@@ -645,6 +667,8 @@ int main(int argc, char **argv) {
     }
     min_fast = fast.rve_seconds;
     min_off = slow.rve_seconds;
+    add_times(&tf, &fast, &fast);
+    add_times(&to, &slow, &fast);
     if (repeats > 1) printf("time in rve_update (s), fast / off:  %.3f / %.3f", min_fast, min_off);
     for (r = 1; r < repeats; r++) { /* alternate the order; every run must give the same curve */
         double de, df;
@@ -660,6 +684,8 @@ int main(int argc, char **argv) {
                 failures++;
             }
             printf(",  %.3f / %.3f", f->rve_seconds, o->rve_seconds);
+            add_times(&tf, f, f);
+            add_times(&to, o, f);
             if (f->rve_seconds < min_fast) min_fast = f->rve_seconds;
             if (o->rve_seconds < min_off) min_off = o->rve_seconds;
         }
@@ -686,40 +712,35 @@ int main(int argc, char **argv) {
                phase_name[a->phase], i + 1, a->u, a->f, b->f, rel(a->f, b->f, f_scale),
                a->eps_band, a->eps_rest, a->iterations, b->iterations, a->fast, a->updates,
                1e3 * a->rve_seconds, 1e3 * b->rve_seconds);
-        if (a->fast == a->updates) {
-            all_fast++;
-            t_all_fast += a->rve_seconds;
-            t_all_fast_off += b->rve_seconds;
-        }
+        all_fast += a->fast == a->updates;
     }
     share = fast.updates ? (double)fast.fast_total / (double)fast.updates : 0.0;
-    printf("\n%-11s %15s %7s %11s %11s %8s\n", "phase", "updates", "fast", "RVE s", "RVE s off",
-           "off/fast");
+    printf("\n%-11s %15s %7s %11s %11s %8s   (times summed over %d run%s of each)\n", "phase",
+           "updates", "fast", "RVE s", "RVE s off", "off/fast", repeats, repeats > 1 ? "s" : "");
     for (p = 0; p < NPHASE; p++)
         printf("%-11s %7lu/%-7lu %7lu %11.3f %11.3f %8.2f\n", phase_name[p], fast.updates_phase[p],
-               slow.updates_phase[p], fast.fast_phase[p], fast.rve_phase[p], slow.rve_phase[p],
-               fast.rve_phase[p] > 0 ? slow.rve_phase[p] / fast.rve_phase[p] : 0.0);
+               slow.updates_phase[p], fast.fast_phase[p], tf.phase[p], to.phase[p],
+               tf.phase[p] > 0 ? to.phase[p] / tf.phase[p] : 0.0);
     printf("%-11s %7lu/%-7lu %7lu %11.3f %11.3f %8.2f\n", "all", fast.updates, slow.updates,
-           (unsigned long)fast.fast_total, fast.rve_seconds, slow.rve_seconds,
-           fast.rve_seconds > 0 ? slow.rve_seconds / fast.rve_seconds : 0.0);
+           (unsigned long)fast.fast_total, tf.all, to.all, tf.all > 0 ? to.all / tf.all : 0.0);
     printf("\nfast share: %.3f (%lu of %lu updates answered without a solve; without the fast "
            "path: %lu)\n",
            share, (unsigned long)fast.fast_total, fast.updates, (unsigned long)slow.fast_total);
     printf("time in rve_update: %.3f s with the fast path, %.3f s without: ratio %.2f "
-           "(whole runs %.3f s and %.3f s; steps cut %d and %d)\n",
+           "(first runs; whole runs %.3f s and %.3f s; steps cut %d and %d)\n",
            fast.rve_seconds, slow.rve_seconds,
            fast.rve_seconds > 0 ? slow.rve_seconds / fast.rve_seconds : 0.0, fast.seconds,
            slow.seconds, fast.cuts, slow.cuts);
     if (repeats > 1)
-        printf("  least of %d runs each: %.3f s and %.3f s: ratio %.2f\n", repeats, min_fast,
-               min_off, min_off / min_fast);
-    if (fast.n_fast > 0 && fast.updates > fast.n_fast && slow.updates > 0)
+        printf("  least of %d runs each: %.3f s and %.3f s: ratio %.2f; summed: ratio %.2f\n",
+               repeats, min_fast, min_off, min_off / min_fast, to.all / tf.all);
+    if (tf.n_fast > 0 && tf.updates > tf.n_fast && to.updates > 0)
         printf("per update: fast answer %.1f us, solve %.3f ms (%.3f ms without the fast path); "
-               "the %d steps answered only by the fast path: %.2f ms against %.2f ms\n",
-               1e6 * fast.t_fast / (double)fast.n_fast,
-               1e3 * fast.t_solved / (double)(fast.updates - fast.n_fast),
-               1e3 * slow.t_solved / (double)slow.updates, all_fast, 1e3 * t_all_fast,
-               1e3 * t_all_fast_off);
+               "the %d steps answered only by the fast path: %.2f ms against %.2f ms per run\n",
+               1e6 * tf.fast / (double)tf.n_fast,
+               1e3 * tf.solved / (double)(tf.updates - tf.n_fast),
+               1e3 * to.solved / (double)to.updates, all_fast, 1e3 * tf.steps_all_fast / repeats,
+               1e3 * to.steps_all_fast / repeats);
     loc = localized(&fast, &peak, &low);
     if (peak >= 0 && low >= 0)
         printf("localization: F %.4f N at the peak (step %d) -> %.4f N (step %d); band eps_xx "
