@@ -155,16 +155,32 @@ static char *read_file(const char *path) {
     return text;
 }
 
+/* Where the value of the first `key = value` of the scene text starts (a key outside a
+ * comment, not the end of a longer name), or NULL. */
+static const char *find_key(const char *text, const char *key) {
+    const char *k = text;
+    while ((k = strstr(k, key)) != NULL) {
+        const char *line = k, *p = k + strlen(key);
+        int comment = 0;
+        while (line > text && line[-1] != '\n') comment |= *--line == '#';
+        while (*p == ' ' || *p == '\t') p++;
+        if (!comment && *p == '=' &&
+            (k == text || strchr(" \t{,\n", k[-1]) != NULL)) {
+            p++;
+            while (*p == ' ' || *p == '\t') p++;
+            return p;
+        }
+        k += strlen(key);
+    }
+    return NULL;
+}
+
 /* The scene text with the value of the first `sigma_c = X` multiplied by factor. */
 static char *scale_sigma_c(const char *text, double factor) {
-    const char *key = strstr(text, "sigma_c"), *p, *end;
+    const char *p = find_key(text, "sigma_c"), *end;
     char num[64], *out;
     double v;
-    if (!key) return NULL;
-    p = key + strlen("sigma_c");
-    while (*p == ' ' || *p == '\t') p++;
-    if (*p++ != '=') return NULL;
-    while (*p == ' ' || *p == '\t') p++;
+    if (!p) return NULL;
     v = strtod(p, (char **)&end);
     if (end == p) return NULL;
     sprintf(num, "%.15g", v * factor);
@@ -622,7 +638,7 @@ int main(int argc, char **argv) {
         perror(scene);
         return 1;
     }
-    if (strstr(text, "fast_path")) {
+    if (find_key(text, "fast_path")) {
         fprintf(stderr, "localize: %s sets solver.fast_path; the runs set it themselves\n", scene);
         free(text);
         return 1;
