@@ -12,21 +12,35 @@
       Increments, attempts (cut-backs), ccx's Newton iterations per converged increment,
       the residual history of the hardest increment, and the force-displacement curve of
       each run, as Markdown.
+
+  calculix_report.py iterations STEP LABEL=JOB ...
+      ccx's Newton iterations of every increment of step STEP, one column per run, and
+      the force residuals of each run's increment with the most iterations, as Markdown.
+
+  calculix_report.py band JOB
+      The localization of specimen_band.inp: the force's peak in the tension (time <= 2)
+      and its lowest value after it, and the mean strains of the band (between the node
+      sets BANDLOW and BANDTOP) and of the two sound rows there. Exit status 1 unless the
+      force falls after its peak by at least DROP while U grows, the band stretches and
+      the sound rows contract (unload).
 """
 import re
 import sys
 
 TOLERANCE = 1e-6
+DROP = 0.01
 
 
-def dat_blocks(path, kind):
-    """{time: [[values per line]]} of the blocks `kind` ('stresses', 'forces', ...)."""
+def dat_blocks(path, kind, nset=None):
+    """{time: [[values per line]]} of the blocks `kind` ('stresses', 'forces', ...), of
+    the set `nset` only when given."""
     blocks, current = {}, None
     with open(path) as f:
         for line in f:
-            m = re.match(r"\s*(?:total )?(\w+) \(.*\) for set \w+ and time\s+(\S+)", line)
+            m = re.match(r"\s*(?:total )?(\w+) \(.*\) for set (\w+) and time\s+(\S+)", line)
             if m:
-                current = blocks.setdefault(float(m.group(2)), []) if m.group(1) == kind else None
+                wanted = m.group(1) == kind and (nset is None or m.group(2) == nset.upper())
+                current = blocks.setdefault(float(m.group(3)), []) if wanted else None
                 continue
             if current is not None and line.strip():
                 current.append([float(v) for v in line.split()])
@@ -88,8 +102,8 @@ def cvg(job):
 
 def curve(job):
     """[(time, U, F)]: the loaded face's displacement and total reaction per increment."""
-    forces = dat_blocks(job + ".dat", "force")
-    disp = dat_blocks(job + ".dat", "displacements")
+    forces = dat_blocks(job + ".dat", "force", "TOP")
+    disp = dat_blocks(job + ".dat", "displacements", "TOP")
     return [(t, disp[t][0][2] if disp.get(t) else float("nan"), forces[t][0][1])
             for t in sorted(forces)]
 
@@ -125,6 +139,54 @@ def specimen(runs):
             print(f"| {t:.4f} | {u:.5e} | {f:.4e} |")
 
 
+def band_strains(job):
+    """{time: (band's mean eps_yy, sound rows' mean eps_yy)} of specimen_band.inp."""
+    low = dat_blocks(job + ".dat", "displacements", "BANDLOW")
+    top = dat_blocks(job + ".dat", "displacements", "BANDTOP")
+    out = {}
+    for t, u, _ in curve(job):
+        a = sum(r[2] for r in low[t]) / len(low[t])
+        b = sum(r[2] for r in top[t]) / len(top[t])
+        out[t] = ((b - a) / 10.0, (a + u - b) / 20.0)
+    return out
+
+
+def band(job):
+    c = [p for p in curve(job) if p[0] <= 2.0 + 1e-9]
+    strains = band_strains(job)
+    peak = max(range(len(c)), key=lambda k: c[k][2])
+    if peak == len(c) - 1:
+        sys.exit(f"band: the force rises to the end of the tension ({c[peak][2]:.4e} N)")
+    low = min(range(peak, len(c)), key=lambda k: c[k][2])
+    (tp, up, fp), (tl, ul, fl) = c[peak], c[low]
+    (bp, rp), (bl, rl) = strains[tp], strains[tl]
+    print(f"peak {fp:.2f} N at U = {up:.4e} mm; after it down to {fl:.2f} N "
+          f"({100 * (1 - fl / fp):.1f} %) at U = {ul:.4e} mm, then {c[-1][2]:.2f} N at "
+          f"U = {c[-1][1]:.4e} mm. Between the two: the band's mean strain "
+          f"{bp:.4e} -> {bl:.4e}, the sound rows' {rp:.4e} -> {rl:.4e}.")
+    ok = fl < (1 - DROP) * fp and ul > up and bl > bp and rl < rp
+    if not ok:
+        sys.exit(f"band: no localization (a force drop of at least {DROP:.0%} after the peak "
+                 "with the band stretching and the sound rows unloading)")
+
+
+def iterations(step, runs):
+    cols = []
+    for label, job in runs:
+        cols.append([r[4] for r in sta(job) if r[0] == step and r[3]])
+    print("| increment | " + " | ".join(label for label, _ in runs) + " |")
+    print("|---|" + "---|" * len(runs))
+    for k in range(max(len(c) for c in cols)):
+        print(f"| {k + 1} | " + " | ".join(str(c[k]) if k < len(c) else "" for c in cols) + " |")
+    print("| total | " + " | ".join(str(sum(c)) for c in cols) + " |")
+    for label, job in runs:
+        rows = [r for r in sta(job) if r[0] == step and r[3]]
+        hard = max(rows, key=lambda r: r[4])
+        seq = cvg(job).get((hard[0], hard[1], hard[2]), [])
+        print(f"\n{label}, step {step}, increment {hard[1]} (the most iterations): force "
+              "residuals (%) " + ", ".join(f"{v:.1e}" for v in seq))
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "homogeneous":
         homogeneous(sys.argv[2], sys.argv[3])
@@ -135,5 +197,9 @@ if __name__ == "__main__":
                 arg.split("=")[0], *arg.split("=", 1)[1].split(","))
             runs.append((label, job, seconds, finished))
         specimen(runs)
+    elif sys.argv[1] == "iterations":
+        iterations(int(sys.argv[2]), [tuple(a.split("=", 1)) for a in sys.argv[3:]])
+    elif sys.argv[1] == "band":
+        band(sys.argv[2])
     else:
         sys.exit(__doc__)
