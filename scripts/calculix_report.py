@@ -147,6 +147,7 @@ def band_strains(job):
     for t, u, _ in curve(job):
         a = sum(r[2] for r in low[t]) / len(low[t])
         b = sum(r[2] for r in top[t]) / len(top[t])
+        # The band (between BANDLOW and BANDTOP) is 10 mm high, the two sound rows 20 mm.
         out[t] = ((b - a) / 10.0, (a + u - b) / 20.0)
     return out
 
@@ -170,17 +171,20 @@ def band(job):
                  "with the band stretching and the sound rows unloading)")
 
 
+def converged(job, step):
+    """The `sta` rows of the converged increments of step `step`."""
+    return [r for r in sta(job) if r[0] == step and r[3]]
+
+
 def iterations(step, runs):
-    cols = []
-    for label, job in runs:
-        cols.append([r[4] for r in sta(job) if r[0] == step and r[3]])
+    rows_of = [converged(job, step) for _, job in runs]
+    cols = [[r[4] for r in rows] for rows in rows_of]
     print("| increment | " + " | ".join(label for label, _ in runs) + " |")
     print("|---|" + "---|" * len(runs))
     for k in range(max(len(c) for c in cols)):
         print(f"| {k + 1} | " + " | ".join(str(c[k]) if k < len(c) else "" for c in cols) + " |")
     print("| total | " + " | ".join(str(sum(c)) for c in cols) + " |")
-    for label, job in runs:
-        rows = [r for r in sta(job) if r[0] == step and r[3]]
+    for (label, job), rows in zip(runs, rows_of):
         hard = max(rows, key=lambda r: r[4])
         seq = cvg(job).get((hard[0], hard[1], hard[2]), [])
         print(f"\n{label}, step {step}, increment {hard[1]} (the most iterations): force "
