@@ -295,6 +295,12 @@ const CHECKSUM: usize = 4;
 /// the anchor strain (3 f64).
 const NO_FAST_PATH_DATA: usize = 1 + 72 + 24 + 8 + 8 + 24;
 
+/// Bytes of format 8's held contact status for `nh` history values: the u64 length, then
+/// one u64 per 64 values.
+fn held_contact_bytes(nh: usize) -> usize {
+    8 + 8 * nh.div_ceil(64)
+}
+
 /// State bytes of format >= 6 with their trailing checksum recomputed (a deliberate edit).
 fn with_checksum(mut bytes: Vec<u8>) -> Vec<u8> {
     let body = bytes.len() - CHECKSUM;
@@ -342,7 +348,7 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
     // A format this library does not know, with a valid checksum (a later version), is
     // STATE_VERSION; the same version change without a new checksum is corruption.
-    for unknown_version in [0u8, 8] {
+    for unknown_version in [0u8, 9] {
         let mut other_version = bytes.clone();
         other_version[8] = unknown_version;
         assert_eq!(load(&other_version), RveStatus::BadState as u32);
@@ -357,7 +363,12 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     // load), then the checksum.
     let mut negative = bytes.clone();
     let n = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
-    let curvature_at = negative.len() - CHECKSUM - NO_FAST_PATH_DATA - curvature_bytes(n, true);
+    let nh = u64::from_le_bytes(bytes[24..32].try_into().unwrap()) as usize;
+    let curvature_at = negative.len()
+        - CHECKSUM
+        - held_contact_bytes(nh)
+        - NO_FAST_PATH_DATA
+        - curvature_bytes(n, true);
     assert_eq!(
         bytes[curvature_at], 1,
         "the path curvature is filled and valid"
@@ -562,7 +573,7 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         "{sig_old:?} vs {sig_new:?}"
     );
     assert!(rel(&d_old, &d_new) <= 1e-6, "{d_old:?} vs {d_new:?}");
-    // Saved again, it is the current format (7) with the sensitivity (the increment from
+    // Saved again, it is the current format (8) with the sensitivity (the increment from
     // the elastic predictor left the path curvature empty), and loads back.
     let mut size = 0;
     assert_eq!(rve_commit(old), OK);
@@ -573,21 +584,22 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         unsafe { rve_state_save(old, saved.as_mut_ptr(), size, &mut written) },
         OK
     );
-    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 7);
+    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 8);
     assert_eq!(
         unsafe { rve_state_load(fresh, saved.as_ptr(), written) },
         OK
     );
-    // Format 5: format 7 without the fast-path data and the checksum; format 4: without the path curvature
-    // either.
+    // Format 5: format 8 without the held contact status, the fast-path data and the
+    // checksum; format 4: without the path curvature either.
     let n = u64::from_le_bytes(saved[16..24].try_into().unwrap()) as usize;
+    let nh = u64::from_le_bytes(saved[24..32].try_into().unwrap()) as usize;
     let with_version = |mut bytes: Vec<u8>, version: u32| {
         bytes[8..12].copy_from_slice(&version.to_le_bytes());
         let payload = (bytes.len() - 40) as u64;
         bytes[32..40].copy_from_slice(&payload.to_le_bytes());
         bytes
     };
-    let format6_len = written - CHECKSUM - NO_FAST_PATH_DATA;
+    let format6_len = written - CHECKSUM - held_contact_bytes(nh) - NO_FAST_PATH_DATA;
     let format5 = with_version(saved[..format6_len].to_vec(), 5);
     let format4_len = format6_len - curvature_bytes(n, false);
     let format4 = with_version(saved[..format4_len].to_vec(), 4);

@@ -717,9 +717,9 @@ fn penalty_study() {
     // The paper's law (with the contact status held within a Newton iteration, the
     // default; read at every evaluation it failed from 1e6 up, see
     // docs/contact-algorithm.md): every value goes through, and from 1e7 up the response
-    // is within 1 % of 1e9 (0.78 % and 0.81 % measured: the largest difference is after
-    // the snap, where the increments land on different post-snap equilibria, 3.33 against
-    // 3.43 N/mm²), while 1e4 and 1e5 are off by 47 % and 12 %. At the end of the
+    // is within 1 % of 1e9 (0.69 % and 0.075 % measured: the largest difference is after
+    // the snap, where the increments land on different post-snap equilibria), while 1e4
+    // and 1e5 are off by 47 % and 12 %. At the end of the
     // compression branch the stress converges first order: 1.5e-3 (1e7), 1.4e-4 (1e8).
     let (paper, dist) = study("penalty");
     assert!(dist[3] < 0.01 && dist[4] < 0.01, "{dist:?}");

@@ -230,6 +230,15 @@ impl Instance {
                 ),
             });
         }
+        let held_beyond = (points..state.history.len()).any(|i| state.is_held(i));
+        if held_beyond {
+            return Err(Error::BadState {
+                reason: format!(
+                    "contact status held at a point beyond the model's {points} interface \
+                     points"
+                ),
+            });
+        }
         self.committed = state;
         self.revert();
         Ok(())

@@ -28,6 +28,33 @@
 //! starts closer to the target, exactly as after a corrector that does not converge; the
 //! tracer gives up after [`MAX_CUTS`] failures in a row. A trace has no budget on its
 //! total iterations: where an increment lands matters more to a host than what it costs.
+//! A failed landing is not tried again from the same arc point (it would start from the
+//! same prediction): the next attempt is an arc step short of the target.
+//!
+//! # Contact status along a trace
+//! An arc point is a converged state like a sub-step's end, and carries its contact status
+//! the same way (see `contact`): the points it holds against their gap are recorded in
+//! `trial.held_contact`, and the next corrector starts from the status the arc point is
+//! in equilibrium with. A corrector switches no point on its way (its status stays that
+//! of its start). At a converged iterate with points held closed whose gap opened, it
+//! opens them and looks, for at most [`RELEASE_BUDGET`] iterations, for the point of the
+//! same arc with them open; it keeps the held-status point if there is none, as a Newton
+//! loop does with its pinned points. Points held open whose gap closed stay open to the
+//! landing, which reads every gap (they carry the normal penalty either way; closing them
+//! jumps their shear traction by the paper's law). Measured choices (`docs/solver.md`):
+//! read from the gaps at each arc point, a sliding point whose gap closed on the way
+//! makes the arc point no equilibrium and the path was lost; held at the trace's start
+//! status with no release, the cycle of the penalty study lands on another post-snap
+//! equilibrium; releasing the closed points as well costs 9 % more factorizations.
+//!
+//! # When a trace stops
+//! Besides the cuts below, a corrector gives up once its iterates cycle: an interface
+//! branch set it had within the last [`CYCLE_WINDOW`] iterations comes back without the
+//! residual having halved since (a semismooth Newton cycling between branch sets never
+//! converges; the arc is halved at once instead of after [`MAX_CORRECTOR`] iterations). A
+//! path traced back past the start of the whole strain history
+//! (`t < -(|eps_0| / |Delta eps| + 1)`) is lost: it has left the snap-back for a branch
+//! that runs away (measured: an unloading branch followed to `t = -5e5` over 400 points).
 
 use super::contact;
 use super::newton::{newton, Mode};
@@ -39,7 +66,7 @@ use crate::state::State;
 
 /// Most arc points per call, and corrector iterations per point.
 const MAX_POINTS: u32 = 400;
-const MAX_CORRECTOR: u32 = 12;
+const MAX_CORRECTOR: usize = 12;
 /// Newton iterations of one landing attempt at the target strain.
 const MAX_LANDING: u32 = 12;
 /// Failed attempts in a row (each halves the arc length) after which the path is lost:
@@ -51,6 +78,10 @@ const MAX_CUTS: u32 = 8;
 const MIN_LENGTH: f64 = 1e-4;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;
+/// Iterations back over which a corrector looks for a branch set that comes back.
+const CYCLE_WINDOW: usize = 4;
+/// Corrector iterations spent looking for an arc point with released points.
+const RELEASE_BUDGET: usize = 6;
 
 /// Work and progress of one traced path, counted whether or not it lands.
 #[derive(Default)]
@@ -97,7 +128,8 @@ fn load_direction(problem: &Problem, ws: &mut Workspace) {
 /// `trial.history`), and `ws.current`/`ws.factorization` belong to it, as after a
 /// converged Newton loop. Returns `false` when the path cannot be followed (singular
 /// system, [`MAX_CUTS`] failed attempts in a row, an arc length below [`MIN_LENGTH`] of
-/// the first, [`MAX_POINTS`] exhausted); `trial` then holds the last converged arc point,
+/// the first, [`MAX_POINTS`] exhausted, an arc point back past the start of the strain
+/// history); `trial` then holds the last converged arc point,
 /// still valid. `work` counts what was done either way.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn trace(
@@ -114,15 +146,19 @@ pub(super) fn trace(
     let tolerance = settings.tolerance * reference;
     problem.load(&line.delta, &mut ws.trace.f);
     let mut t_a = from;
+    let magnitude = |e: &Strain| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+    let back_limit = -(magnitude(&line.origin) / magnitude(&line.delta) + 1.0);
     ws.trace.prev.iter_mut().for_each(|v| *v = 0.0);
     let (mut length, mut first_length) = (0.0, 0.0);
     let mut cuts = 0;
     let mut going_forward = true;
     // Whether `ws.trace.dxf` holds a tangent direction for the arc point `x_a`.
     let mut direction_ready = false;
+    // Whether a landing from the current arc point has failed.
+    let mut landing_failed = false;
     for _ in 0..MAX_POINTS {
         ws.history_start.copy_from_slice(&trial.history);
-        contact::hold_start(problem, &trial.unknowns, ws);
+        contact::hold_state(problem, trial, ws);
         ws.trace.xa.copy_from_slice(&trial.unknowns);
         if !direction_ready && !tangent_at(problem, &line.at(t_a), trial, ws) {
             return false;
@@ -136,22 +172,33 @@ pub(super) fn trace(
             length = (to - from) * dxf_norm / 8.0;
             first_length = length;
         }
-        let dt_pred = direction(work.points, &ws.trace) * length / dxf_norm;
+        let mut dt_pred = direction(work.points, &ws.trace) * length / dxf_norm;
+        if landing_failed && t_a + dt_pred >= to {
+            // Not the same landing again: an arc step half way to the target.
+            length = 0.5 * (to - t_a) * dxf_norm;
+            dt_pred = 0.5 * (to - t_a);
+        }
         let converged = if t_a + dt_pred >= to {
             if land(problem, settings, line, t_a, to, trial, ws, work) {
                 return true;
             }
+            landing_failed = true;
             false // a failed landing leaves `dxf` alone
         } else if let Some(t) = correct(
             problem, tolerance, line, t_a, dt_pred, length, trial, ws, work,
         ) {
             accept_point(&line.at(t), trial, ws);
+            contact::record_held(problem, trial, ws);
             let forward = t > t_a;
             if forward != going_forward {
                 work.limit_points += 1;
                 going_forward = forward;
             }
+            if t < back_limit {
+                return false;
+            }
             t_a = t;
+            landing_failed = false;
             work.points += 1;
             length *= GROWTH;
             true
@@ -279,15 +326,46 @@ fn correct(
         *x = xa + dt_pred * p;
     }
     let mut t = t_a + dt_pred;
-    for _ in 0..MAX_CORRECTOR {
+    // The branch signature and residual of the last iterates (see "When a trace stops").
+    let mut recent = [(0u64, f64::INFINITY); CYCLE_WINDOW];
+    // The iteration at which the points held against their gap were released at a
+    // converged iterate, and that iterate's `t` (its unknowns are in `ws.pinned_x`).
+    let mut released: Option<(usize, f64)> = None;
+    let mut iteration = 0;
+    loop {
         problem.evaluate(&trial.unknowns, &line.at(t), TangentKind::Consistent, ws);
         let rnorm = dot(&ws.current.r, &ws.current.r).sqrt();
-        if !rnorm.is_finite() {
-            return None;
-        }
         if rnorm <= tolerance {
+            if released.is_none() && contact::release_opened(problem, &trial.unknowns, ws) {
+                // Converged with points held closed whose gap opened: look once for the
+                // point of this arc with them open, from here (as `newton` does).
+                ws.pinned_x.copy_from_slice(&trial.unknowns);
+                ws.trace.held_dxf.copy_from_slice(&ws.trace.dxf);
+                released = Some((iteration, t));
+                recent = [(0u64, f64::INFINITY); CYCLE_WINDOW];
+                continue;
+            }
             return Some(t);
         }
+        let branches = ws.current.counts.branch_signature;
+        let cycling = recent
+            .iter()
+            .any(|&(b, r)| b == branches && rnorm >= 0.5 * r);
+        let out_of_budget = match released {
+            Some((at, _)) => iteration >= at + RELEASE_BUDGET,
+            None => iteration >= MAX_CORRECTOR,
+        };
+        if cycling || out_of_budget || !rnorm.is_finite() {
+            let (_, t_held) = released?;
+            // No point with the gaps' status: back to the one with the held status.
+            trial.unknowns.copy_from_slice(&ws.pinned_x);
+            ws.trace.dxf.copy_from_slice(&ws.trace.held_dxf);
+            contact::restore_saved(ws);
+            problem.evaluate(&trial.unknowns, &line.at(t_held), TangentKind::Consistent, ws);
+            return Some(t_held);
+        }
+        recent[iteration % CYCLE_WINDOW] = (branches, rnorm);
+        iteration += 1;
         problem.factorize(ws, false).ok()?;
         work.iterations += 1;
         // dx_R into ws.dx, dx_f into ws.trace.dxf (both with this factorization).
@@ -316,5 +394,4 @@ fn correct(
         }
         t += dt;
     }
-    None
 }

@@ -24,14 +24,26 @@
 //! Every point that can still switch agrees with its gap at convergence. If all do, the
 //! converged state is an equilibrium of the law with the status read from the gaps, the
 //! one [`ContactStatus::PerIteration`] looks for. A point held against its gap is evaluated
-//! by the branch of its held status ([`crate::interface::InterfaceLaw::respond_as`]); the
-//! next step reads its status from its gap again. An arc-length corrector holds the
-//! status of its arc point throughout. Nothing is stored in the state: the status of a
-//! start state is read from its unknowns.
+//! by the branch of its held status ([`crate::interface::InterfaceLaw::respond_as`]).
+//!
+//! The converged status is part of the converged state: the state records the points it
+//! holds against their gap ([`State::held_contact`]), and a loop that starts from a
+//! converged state (the committed state, a converged sub-step) starts from the status
+//! that state is in equilibrium with, its gaps' status with those points flipped. Those
+//! points are *pinned*: they keep that status for the loop's first iterate and its first
+//! corrections (`PINNED_CORRECTIONS`, see `newton`), and are read again like any other
+//! point after them. So a step short enough for its prediction, or a correction or two,
+//! to converge converges with the start's status, and the response is continuous in the
+//! step. (Read from the gaps instead, every update after a state with
+//! held points would start out of equilibrium by the traction jump of those points:
+//! measured up to 1e2 times the tolerance's reference on the hard cases.) Path following
+//! treats its arc points the same way, and an arc-length corrector holds its start's
+//! status until it converges (see `arclength`).
 
 use super::problem::Problem;
 use super::settings::ContactStatus;
 use super::workspace::Workspace;
+use crate::state::State;
 
 /// How many times one point may switch its status within one Newton loop: close and
 /// reopen (or open and close again). One switch is not enough: a point switched by an
@@ -51,13 +63,40 @@ pub(super) fn configure(problem: &Problem, ws: &mut Workspace) {
             .is_some_and(|law| law.has_contact_status());
 }
 
-/// Reads the status of the start state `x_start` of the next loops from its gaps, and
-/// holds it. Called wherever a loop's start history is set.
-pub(super) fn hold_start(problem: &Problem, x_start: &[f64], ws: &mut Workspace) {
+/// Holds the status the converged state `start` is in equilibrium with: its gaps' status
+/// with the points it holds against their gap flipped, those pinned for the first
+/// iterate. Called wherever a loop starts from a converged state.
+pub(super) fn hold_state(problem: &Problem, start: &State, ws: &mut Workspace) {
     if ws.contact.held {
-        problem.disc.contact_status(x_start, &mut ws.contact.start);
+        let c = &mut ws.contact;
+        problem.disc.contact_status(&start.unknowns, &mut c.start);
+        for (i, (status, pinned)) in c.start.iter_mut().zip(&mut c.pinned).enumerate() {
+            *pinned = start.is_held(i);
+            *status ^= *pinned;
+        }
         restore(ws);
     }
+}
+
+/// Records in `state.held_contact` the points the last loop holds at a status the gaps at
+/// the converged `state.unknowns` contradict, and returns how many there are.
+pub(super) fn record_held(problem: &Problem, state: &mut State, ws: &mut Workspace) -> usize {
+    state.held_contact.fill(0);
+    let c = &mut ws.contact;
+    if !c.held {
+        return 0;
+    }
+    problem.disc.contact_status(&state.unknowns, &mut c.read);
+    let mut count = 0;
+    for (i, (now, read)) in c.now.iter().zip(&c.read).enumerate() {
+        if now != read {
+            if let Some(word) = state.held_contact.get_mut(i / 64) {
+                *word |= 1 << (i % 64);
+            }
+            count += 1;
+        }
+    }
+    count
 }
 
 /// Holds the start state's status again, no point switched (before a loop or a
@@ -71,17 +110,29 @@ pub(super) fn restore(ws: &mut Workspace) {
 }
 
 /// Reads the gaps at the iterate `x` and switches every point whose gap disagrees with its
-/// held status and that has switched fewer than [`MAX_SWITCHES`] times in this loop;
-/// returns how many switched (the caller then evaluates `x` again).
-pub(super) fn update(problem: &Problem, x: &[f64], ws: &mut Workspace) -> usize {
+/// held status and that has switched fewer than [`MAX_SWITCHES`] times in this loop; the
+/// pinned points only with `release_pinned` (an iterate that has not converged). Returns
+/// how many switched (the caller then evaluates `x` again).
+pub(super) fn update(
+    problem: &Problem,
+    x: &[f64],
+    release_pinned: bool,
+    ws: &mut Workspace,
+) -> usize {
     let c = &mut ws.contact;
     if !c.held {
         return 0;
     }
     problem.disc.contact_status(x, &mut c.read);
     let mut switched = 0;
-    for ((held, count), &read) in c.now.iter_mut().zip(&mut c.switches).zip(&c.read) {
-        if *held != read && *count < MAX_SWITCHES {
+    for (((held, count), &read), &pinned) in c
+        .now
+        .iter_mut()
+        .zip(&mut c.switches)
+        .zip(&c.read)
+        .zip(&c.pinned)
+    {
+        if *held != read && *count < MAX_SWITCHES && (release_pinned || !pinned) {
             *held = read;
             *count += 1;
             switched += 1;
@@ -96,13 +147,75 @@ pub(super) fn held(ws: &Workspace) -> bool {
     ws.contact.held
 }
 
-/// How many points the last loop holds at a status that the gaps at its converged iterate
-/// `x` contradict.
-pub(super) fn held_against_gap(problem: &Problem, x: &[f64], ws: &mut Workspace) -> usize {
+/// Whether a pinned point is still held against its gap at `x`; if so, saves the held
+/// status, unpins every point and switches those against their gap (returns true: the
+/// caller evaluates `x` again).
+pub(super) fn release_pinned(problem: &Problem, x: &[f64], ws: &mut Workspace) -> bool {
+    release(problem, x, Release::Pinned, ws)
+}
+
+/// Whether a point is held closed at `x` while its gap is open; if so, saves the held
+/// status, unpins every point and opens those (returns true: the caller evaluates `x`
+/// again). An arc-length corrector, which switches no point on its way, does this at its
+/// converged iterate. A point held open while its gap closed stays open: it carries the
+/// normal penalty either way, and closing it would jump its shear traction (see
+/// `arclength`).
+pub(super) fn release_opened(problem: &Problem, x: &[f64], ws: &mut Workspace) -> bool {
+    release(problem, x, Release::Opened, ws)
+}
+
+/// Which points [`release`] switches to their gap's status.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Release {
+    /// The pinned points against their gap.
+    Pinned,
+    /// The points held closed whose gap is open.
+    Opened,
+}
+
+/// [`release_pinned`] or [`release_opened`].
+fn release(problem: &Problem, x: &[f64], which: Release, ws: &mut Workspace) -> bool {
     let c = &mut ws.contact;
-    if !c.held {
-        return 0;
+    if !c.held || (which == Release::Pinned && !c.pinned.iter().any(|&p| p)) {
+        return false;
     }
     problem.disc.contact_status(x, &mut c.read);
-    c.now.iter().zip(&c.read).filter(|(a, b)| a != b).count()
+    let switches = |now: bool, closed: bool, pinned: bool| {
+        now != closed
+            && match which {
+                Release::Pinned => pinned,
+                Release::Opened => !closed,
+            }
+    };
+    let against = c
+        .now
+        .iter()
+        .zip(&c.read)
+        .zip(&c.pinned)
+        .any(|((&now, &closed), &pinned)| switches(now, closed, pinned));
+    if !against {
+        return false;
+    }
+    c.saved.copy_from_slice(&c.now);
+    for (((now, &closed), pinned), count) in c
+        .now
+        .iter_mut()
+        .zip(&c.read)
+        .zip(&mut c.pinned)
+        .zip(&mut c.switches)
+    {
+        if switches(*now, closed, *pinned) {
+            *now = closed;
+            *count += 1;
+        }
+        *pinned = false;
+    }
+    true
+}
+
+/// Holds the status saved by [`release_pinned`] again.
+pub(super) fn restore_saved(ws: &mut Workspace) {
+    let c = &mut ws.contact;
+    c.now.copy_from_slice(&c.saved);
+    c.switches.fill(MAX_SWITCHES);
 }

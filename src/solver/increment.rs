@@ -158,7 +158,7 @@ fn solve_from(
     let counts = ws.current.counts;
     (report.loading, report.unloading, report.contact) =
         (counts.loading, counts.unloading, counts.contact);
-    report.held_points = contact::held_against_gap(problem, &trial.unknowns, ws);
+    report.held_points = contact::record_held(problem, trial, ws);
     let mut solved = [0.0; 9];
     if request == TangentRequest::Consistent {
         solved = condensed_tangent(problem, ws)?;
@@ -285,13 +285,14 @@ impl Increment<'_, '_> {
             };
             ws.substep_start.copy_from(trial);
             ws.history_start.copy_from_slice(&trial.history);
-            contact::hold_start(self.problem, &trial.unknowns, ws);
+            contact::hold_state(self.problem, trial, ws);
             match self.solve_substep(&sub, trial, ws) {
                 Ok(iterations) => {
                     self.report.iterations += iterations;
                     self.report.substeps += 1;
                     trial.history.copy_from_slice(&ws.current.history);
                     trial.strain = target;
+                    contact::record_held(self.problem, trial, ws);
                     done = to;
                     successes_in_row += 1;
                     if successes_in_row >= 2 && step < 1.0 {
@@ -420,7 +421,7 @@ impl Increment<'_, '_> {
             }
             Remedy::SecantIterations => {
                 ws.history_start.copy_from_slice(&trial.history);
-                contact::hold_start(problem, &trial.unknowns, ws);
+                contact::hold_state(problem, trial, ws);
                 newton(
                     problem,
                     &settings,

@@ -94,6 +94,13 @@ const CHORD_CONTRACTION: f64 = 1e-2;
 /// local minimum that is no root, and path following is the remedy; in the sub-steps of
 /// a bisection slow Newton is the remedy that works, so only the first try stops early.
 const STAGNATION_WINDOW: usize = 10;
+/// Points pinned at the status of the loop's start state (`contact`) keep it for this
+/// many corrections, and are read from their gaps again after them: a step short enough
+/// converges within them, with the start's status, where a switch would throw the iterate
+/// out by the traction jump (up to 1e2 of the reference on the hard cases).
+const PINNED_CORRECTIONS: u32 = 2;
+/// Corrections spent looking for an equilibrium with released pinned points.
+const RELEASE_BUDGET: u32 = 6;
 /// Secant iterations hand over to Newton below this multiple of the tolerance.
 const SECANT_HANDOVER: f64 = 100.0;
 
@@ -128,13 +135,16 @@ pub(super) fn newton(
     if !(evaluated && kind == TangentKind::Consistent) {
         problem.evaluate(x, strain, kind, ws);
     }
-    // The contact status of the first iteration (see `contact`).
-    if contact::update(problem, x, ws) > 0 {
+    // The contact status of the first iteration (see `contact`); pinned points keep
+    // theirs.
+    if contact::update(problem, x, false, ws) > 0 {
         problem.evaluate(x, strain, kind, ws);
     }
     let mut rnorm = norm(&ws.current.r);
     let mut iteration = 0u32;
     let mut chord = false;
+    // The iteration at which pinned points were released at a converged iterate.
+    let mut released: Option<u32> = None;
     // The interface branches of the iterate whose tangent is factorized.
     let mut factored_branches = 0u64;
     loop {
@@ -143,10 +153,21 @@ pub(super) fn newton(
             ws.branch_signatures
                 .push(ws.current.counts.branch_signature);
         }
-        if !rnorm.is_finite() {
+        if !rnorm.is_finite() && released.is_none() {
             return Err(Failure::NonFinite);
         }
         if rnorm <= tolerance {
+            if released.is_none() && contact::release_pinned(problem, x, ws) {
+                // Converged with points pinned against their gap: look once for an
+                // equilibrium with their gaps' status, from here.
+                ws.pinned_x.copy_from_slice(x);
+                released = Some(iteration);
+                problem.evaluate(x, strain, kind, ws);
+                rnorm = norm(&ws.current.r);
+                chord = false;
+                ws.factorization.invalidate();
+                continue;
+            }
             if kind == TangentKind::Secant {
                 // Converged on secant matrices: the tangent needs the consistent one.
                 problem.evaluate(x, strain, TangentKind::Consistent, ws);
@@ -154,7 +175,20 @@ pub(super) fn newton(
             }
             return Ok(iteration);
         }
-        if iteration >= max_iterations || (mode == Mode::NewtonUntilStagnant && stagnant(ws)) {
+        let out_of_budget = released.is_some_and(|r| iteration >= r + RELEASE_BUDGET)
+            || !rnorm.is_finite();
+        if iteration >= max_iterations
+            || out_of_budget
+            || (mode == Mode::NewtonUntilStagnant && stagnant(ws))
+        {
+            if released.is_some() {
+                // No equilibrium with the gaps' status found: back to the pinned one.
+                x.copy_from_slice(&ws.pinned_x);
+                contact::restore_saved(ws);
+                problem.evaluate(x, strain, TangentKind::Consistent, ws);
+                ws.factorization.invalidate();
+                return Ok(iteration);
+            }
             return Err(Failure::NotConverged {
                 residual: rnorm,
                 reference,
@@ -173,7 +207,8 @@ pub(super) fn newton(
         x.copy_from_slice(&ws.x_try);
         accept_candidate(ws);
         // The contact status of the next iteration.
-        let new_norm = if contact::update(problem, x, ws) > 0 {
+        let release = iteration >= PINNED_CORRECTIONS;
+        let new_norm = if contact::update(problem, x, release, ws) > 0 {
             problem.evaluate(x, strain, kind, ws);
             norm(&ws.current.r)
         } else {

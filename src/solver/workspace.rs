@@ -179,6 +179,9 @@ pub(super) struct TraceBuffers {
     pub xa: Vec<f64>,
     pub prev: Vec<f64>,
     pub pred: Vec<f64>,
+    /// The path direction at a corrector's converged iterate before its pinned points
+    /// were released (see `arclength::correct`).
+    pub held_dxf: Vec<f64>,
 }
 
 /// The contact status of the interface points within a Newton loop (see `contact`).
@@ -191,6 +194,11 @@ pub(super) struct ContactBuffers {
     pub now: Vec<bool>,
     pub switches: Vec<u8>,
     pub read: Vec<bool>,
+    /// Points the start state holds against their gap: not read again at the loop's
+    /// first iterate (see `contact`).
+    pub pinned: Vec<bool>,
+    /// The held status of the converged iterate `Workspace::pinned_x`.
+    pub saved: Vec<bool>,
 }
 
 impl ContactBuffers {
@@ -209,6 +217,8 @@ pub struct Workspace {
     /// Newton correction, candidate iterate, and the scratch of 4-column solves.
     pub(super) dx: Vec<f64>,
     pub(super) x_try: Vec<f64>,
+    /// A converged iterate with pinned points held, kept while they are released once.
+    pub(super) pinned_x: Vec<f64>,
     pub(super) rhs4: Vec<f64>,
     /// `X_n Delta eps`, the first-order part of the tangent prediction (see `predictor`).
     pub(super) tangent_prediction: Vec<f64>,
@@ -250,6 +260,7 @@ impl Workspace {
             factorization: Factorization::new(linear, n, nnz),
             dx: zeros(),
             x_try: zeros(),
+            pinned_x: zeros(),
             rhs4: vec![0.0; 4 * n],
             tangent_prediction: zeros(),
             kg_res: vec![0.0; 3 * n],
@@ -262,6 +273,7 @@ impl Workspace {
                 xa: zeros(),
                 prev: zeros(),
                 pred: zeros(),
+                held_dxf: zeros(),
             },
             contact: ContactBuffers {
                 held: false,
@@ -269,6 +281,8 @@ impl Workspace {
                 now: vec![false; disc.interface_points()],
                 switches: vec![0; disc.interface_points()],
                 read: vec![false; disc.interface_points()],
+                pinned: vec![false; disc.interface_points()],
+                saved: vec![false; disc.interface_points()],
             },
             residuals: Vec::with_capacity(max_iterations + 2),
             branch_signatures: Vec::with_capacity(max_iterations + 2),

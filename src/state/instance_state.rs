@@ -25,6 +25,17 @@ pub struct State {
     /// [`LinearBranch`]); when valid, `unknowns` hold the fluctuation at
     /// `linear.unknowns_strain`, which may differ from `strain`.
     pub linear: LinearBranch,
+    /// The interface points this state holds at a contact status their gap contradicts
+    /// (the solver's active set, see `solver::contact`), one bit per history value (an
+    /// upper bound on the points), point `i` in bit `i % 64` of word `i / 64`. The next
+    /// update starts from the status this state is in equilibrium with: the gaps' status
+    /// with these points flipped. All zero when every point agrees with its gap.
+    pub held_contact: Vec<u64>,
+}
+
+/// Words of a [`State::held_contact`] bitset for `n_history` history values.
+pub fn held_contact_words(n_history: usize) -> usize {
+    n_history.div_ceil(64)
 }
 
 /// Values per quantization block of a [`Quantized`] vector.
@@ -196,7 +207,15 @@ impl State {
             sensitivity: Sensitivity::empty(),
             curvature: PathCurvature::empty(),
             linear: LinearBranch::default(),
+            held_contact: vec![0; held_contact_words(n_history)],
         }
+    }
+
+    /// Whether point `point` is held against its gap (see [`State::held_contact`]).
+    pub fn is_held(&self, point: usize) -> bool {
+        self.held_contact
+            .get(point / 64)
+            .is_some_and(|w| w >> (point % 64) & 1 == 1)
     }
 
     /// Whether `unknowns` hold the fluctuation at `strain` (false after fast updates: the
@@ -216,6 +235,7 @@ impl State {
         self.curvature.valid = other.curvature.valid;
         self.curvature.step = other.curvature.step;
         self.curvature.data.copy_from(&other.curvature.data);
+        self.held_contact.copy_from_slice(&other.held_contact);
         self.linear.invalidate();
     }
 
@@ -247,6 +267,7 @@ impl State {
             + self.sensitivity.data.bytes()
             + self.curvature.data.bytes()
             + self.linear.bytes()
+            + self.held_contact.capacity() * std::mem::size_of::<u64>()
     }
 }
 

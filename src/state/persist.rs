@@ -31,7 +31,8 @@
 //! | 4 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 8-bit by blocks, empty until filled ([`Sensitivity`]) (read, kept) |
 //! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`PathCurvature`](super::PathCurvature)) (read, kept) |
 //! | 6 | 0.2.0 | format 5 plus the trailing CRC-32C (read, kept; no fast-path data: the next update solves) |
-//! | 7 | main after 0.2.0 | format 6 plus the fast path's [`LinearBranch`](super::LinearBranch) (written) |
+//! | 7 | main after 0.2.0 | format 6 plus the fast path's [`LinearBranch`](super::LinearBranch) (read, kept; no point held against its gap) |
+//! | 8 | main after 0.2.0 | format 7 plus the points held at a contact status their gap contradicts, a bitset ([`State::held_contact`]) (written) |
 //!
 //! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
 //! model, so this module depends on the state alone; `model::Instance::save_state` and
@@ -39,18 +40,19 @@
 
 use serde::Deserialize;
 
-use super::instance_state::{PathCurvature, Sensitivity, State};
+use super::instance_state::{held_contact_words, PathCurvature, Sensitivity, State};
+use super::linear_branch::LinearBranch;
 use crate::error::{Error, Result};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format written; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 7;
+pub const STATE_FORMAT_VERSION: u32 = 8;
 /// Older formats this library still reads without a checksum.
 pub const READABLE_OLD_FORMATS: [u32; 5] = [1, 2, 3, 4, 5];
 /// Older formats this library still reads, with the trailing checksum.
-pub const READABLE_CHECKED_FORMATS: [u32; 1] = [6];
+pub const READABLE_CHECKED_FORMATS: [u32; 2] = [6, 7];
 /// Every older format this library reads.
-const READABLE_FORMATS: [u32; 6] = [1, 2, 3, 4, 5, 6];
+const READABLE_FORMATS: [u32; 7] = [1, 2, 3, 4, 5, 6, 7];
 const HEADER: usize = 40;
 /// Bytes of the trailing CRC-32C.
 const CHECKSUM: usize = 4;
@@ -143,6 +145,7 @@ pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
         || !state.curvature.data.is_consistent(n as usize)
         || !filled_if_valid(state.curvature.valid, &state.curvature.data.values)
         || !state.linear.is_consistent(state.linear.closed.len())
+        || state.held_contact.len() != held_contact_words(nh as usize)
     {
         return Err(bad("payload sizes disagree with the header"));
     }
@@ -207,6 +210,7 @@ fn payload(version: u32, payload: &[u8]) -> Result<State> {
         4 => read::<Format4>(payload)?.into(),
         // Formats 5 and 6 have the same payload.
         5 | 6 => read::<Format6>(payload)?.into(),
+        7 => read::<Format7>(payload)?.into(),
         _ => read::<State>(payload)?,
     })
 }
@@ -228,6 +232,7 @@ fn old_state(
     if let Some(sensitivity) = sensitivity {
         state.sensitivity = sensitivity;
     }
+    state.held_contact = vec![0; held_contact_words(state.history.len())];
     state
 }
 
@@ -319,6 +324,27 @@ impl From<Format6> for State {
     }
 }
 
+/// Format 7: format 6 plus the fast path's [`LinearBranch`], without the held contact
+/// status (read as none held: the next update reads every point's status from its gap).
+#[derive(Deserialize)]
+struct Format7 {
+    strain: [f64; 3],
+    unknowns: Vec<f64>,
+    history: Vec<f64>,
+    sensitivity: Sensitivity,
+    curvature: PathCurvature,
+    linear: LinearBranch,
+}
+
+impl From<Format7> for State {
+    fn from(old: Format7) -> Self {
+        let mut state = old_state(old.strain, old.unknowns, old.history, Some(old.sensitivity));
+        state.curvature = old.curvature;
+        state.linear = old.linear;
+        state
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -386,6 +412,30 @@ mod tests {
         assert!(matches!(decode(&bytes, SIZES), Err(Error::BadState { .. })));
     }
 
+    /// Format 7 (format 8 without the held contact status) loads with no point held, and
+    /// a state with held points round-trips in format 8.
+    #[test]
+    fn format_7_loads_with_no_point_held() {
+        let mut s = state();
+        s.held_contact[0] = 0b101;
+        let bytes = encode(&s, SIZES).unwrap();
+        let decoded = decode(&bytes, SIZES).unwrap();
+        assert_eq!(decoded, s);
+        assert!(decoded.is_held(0) && !decoded.is_held(1) && decoded.is_held(2));
+        // Format 7: the same payload less the bitset (its u64 length and one word).
+        let held = 8 + 8 * s.held_contact.len();
+        let mut old = bytes[..bytes.len() - CHECKSUM - held].to_vec();
+        old[8..12].copy_from_slice(&7u32.to_le_bytes());
+        let payload = (old.len() - HEADER) as u64;
+        old[32..40].copy_from_slice(&payload.to_le_bytes());
+        let sum = crc32c::crc32c(&old);
+        old.extend_from_slice(&sum.to_le_bytes());
+        let loaded = decode(&old, SIZES).unwrap();
+        assert!(loaded.held_contact.iter().all(|&w| w == 0));
+        s.held_contact.fill(0);
+        assert_eq!(loaded, s, "the same state, no point held");
+    }
+
     /// Fast-path data round-trips, and data of inconsistent sizes is refused.
     #[test]
     fn fast_path_data_round_trips() {
@@ -423,8 +473,9 @@ mod tests {
         assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
         // A later format with its checksum is StateVersion; a changed version without
         // a new checksum is corruption.
+        let later = STATE_FORMAT_VERSION + 1;
         let mut other = bytes.clone();
-        other[8] = 8;
+        other[8..12].copy_from_slice(&later.to_le_bytes());
         assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
         let body = other.len() - CHECKSUM;
         let sum = crc32c::crc32c(&other[..body]);
@@ -432,10 +483,10 @@ mod tests {
         assert!(matches!(
             decode(&other, SIZES),
             Err(Error::StateVersion {
-                found: 8,
-                current: 7,
+                found,
+                current: STATE_FORMAT_VERSION,
                 ..
-            })
+            }) if found == later
         ));
         // Any single flipped bit is BadState, in the header as in the payload.
         for bit in 0..8 * bytes.len() {
