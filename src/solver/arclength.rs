@@ -30,6 +30,9 @@
 //! total iterations: where an increment lands matters more to a host than what it costs.
 //! A failed landing is not tried again from the same arc point (it would start from the
 //! same prediction): the next attempt is an arc step short of the target.
+//! A corrector that converges past the target (`t > t_target`, the path crossed it
+//! between two arc points) is not accepted: the tracer lands from the interpolation
+//! between the two points instead, so no history beyond the step's strain is committed.
 //!
 //! # Contact status along a trace
 //! An arc point is a converged state like a sub-step's end, and carries its contact status
@@ -187,21 +190,31 @@ pub(super) fn trace(
         } else if let Some(t) = correct(
             problem, tolerance, line, t_a, dt_pred, length, trial, ws, work,
         ) {
-            accept_point(&line.at(t), trial, ws);
-            contact::record_held(problem, trial, ws);
-            let forward = t > t_a;
-            if forward != going_forward {
-                work.limit_points += 1;
-                going_forward = forward;
+            if t > to {
+                // The path crossed the target between the two arc points: land there from
+                // the interpolation, rather than commit history the step never reaches.
+                if land_between(problem, settings, line, t_a, t, to, trial, ws, work) {
+                    return true;
+                }
+                ws.trace.dxf.copy_from_slice(&ws.trace.pred);
+                false
+            } else {
+                accept_point(&line.at(t), trial, ws);
+                contact::record_held(problem, trial, ws);
+                let forward = t > t_a;
+                if forward != going_forward {
+                    work.limit_points += 1;
+                    going_forward = forward;
+                }
+                if t < back_limit {
+                    return false;
+                }
+                t_a = t;
+                landing_failed = false;
+                work.points += 1;
+                length *= GROWTH;
+                true
             }
-            if t < back_limit {
-                return false;
-            }
-            t_a = t;
-            landing_failed = false;
-            work.points += 1;
-            length *= GROWTH;
-            true
         } else {
             // The corrector overwrote `dxf`: back to the direction at `x_a`.
             ws.trace.dxf.copy_from_slice(&ws.trace.pred);
@@ -300,6 +313,42 @@ fn land(
     outcome.is_ok()
 }
 
+/// Lands on `t = to` under strain control from the interpolation between the arc point
+/// `x_a` at `t_a` and the converged corrector point `trial.unknowns` at `t > to`; returns
+/// whether Newton converged there.
+#[allow(clippy::too_many_arguments)]
+fn land_between(
+    problem: &Problem,
+    settings: &Settings,
+    line: StrainLine,
+    t_a: f64,
+    t: f64,
+    to: f64,
+    trial: &mut State,
+    ws: &mut Workspace,
+    work: &mut Traced,
+) -> bool {
+    let s = (to - t_a) / (t - t_a);
+    for (x, xa) in trial.unknowns.iter_mut().zip(&ws.trace.xa) {
+        *x = xa + s * (*x - xa);
+    }
+    let landing = Settings {
+        max_iterations: MAX_LANDING,
+        ..*settings
+    };
+    let outcome = newton(
+        problem,
+        &landing,
+        &line.at(to),
+        &mut trial.unknowns,
+        ws,
+        Mode::Newton,
+        false,
+    );
+    work.iterations += ws.residuals.len().saturating_sub(1) as u32;
+    outcome.is_ok()
+}
+
 /// The corrector of one arc step of length `length` from the arc point `ws.trace.xa` at
 /// `t_a`, predicted along `dt_pred ws.trace.dxf`: Newton on the residual and Riks' normal
 /// plane together. Returns the converged `t` (the unknowns are in `trial`), or `None`.
@@ -361,7 +410,12 @@ fn correct(
             trial.unknowns.copy_from_slice(&ws.pinned_x);
             ws.trace.dxf.copy_from_slice(&ws.trace.held_dxf);
             contact::restore_saved(ws);
-            problem.evaluate(&trial.unknowns, &line.at(t_held), TangentKind::Consistent, ws);
+            problem.evaluate(
+                &trial.unknowns,
+                &line.at(t_held),
+                TangentKind::Consistent,
+                ws,
+            );
             return Some(t_held);
         }
         recent[iteration % CYCLE_WINDOW] = (branches, rnorm);

@@ -45,7 +45,8 @@ use crate::interface::TangentKind;
 pub(super) enum Mode {
     /// Consistent Newton with backtracking line search.
     Newton,
-    /// The same, giving up early once the residual stagnates (see [`STAGNATION_WINDOW`]).
+    /// The same, giving up early once the residual stagnates or the branch sets cycle (see
+    /// [`STAGNATION_WINDOW`], [`CYCLE_WINDOW`]).
     NewtonUntilStagnant,
     /// Secant iterations, switching to Newton near convergence.
     SecantThenNewton,
@@ -101,6 +102,10 @@ const STAGNATION_WINDOW: usize = 10;
 const PINNED_CORRECTIONS: u32 = 2;
 /// Corrections spent looking for an equilibrium with released pinned points.
 const RELEASE_BUDGET: u32 = 6;
+/// [`Mode::NewtonUntilStagnant`] also gives up once an iterate's interface branch set is
+/// one of the last this many iterates' without the residual having halved since: a
+/// semismooth Newton that comes back to a branch set without progress cycles.
+const CYCLE_WINDOW: usize = 4;
 /// Secant iterations hand over to Newton below this multiple of the tolerance.
 const SECANT_HANDOVER: f64 = 100.0;
 
@@ -175,11 +180,11 @@ pub(super) fn newton(
             }
             return Ok(iteration);
         }
-        let out_of_budget = released.is_some_and(|r| iteration >= r + RELEASE_BUDGET)
-            || !rnorm.is_finite();
+        let out_of_budget =
+            released.is_some_and(|r| iteration >= r + RELEASE_BUDGET) || !rnorm.is_finite();
         if iteration >= max_iterations
             || out_of_budget
-            || (mode == Mode::NewtonUntilStagnant && stagnant(ws))
+            || (mode == Mode::NewtonUntilStagnant && (stagnant(ws) || cycling(ws)))
         {
             if released.is_some() {
                 // No equilibrium with the gaps' status found: back to the pinned one.
@@ -242,6 +247,16 @@ pub(super) fn newton(
 fn stagnant(ws: &Workspace) -> bool {
     let k = ws.residuals.len();
     k > STAGNATION_WINDOW && ws.residuals[k - 1] > 0.5 * ws.residuals[k - 1 - STAGNATION_WINDOW]
+}
+
+/// Whether the last iterate's branch set is one of the [`CYCLE_WINDOW`] iterates' before
+/// it, with the residual not halved since that one.
+fn cycling(ws: &Workspace) -> bool {
+    let (r, b) = (&ws.residuals, &ws.branch_signatures);
+    let k = r.len();
+    k >= 2
+        && (k.saturating_sub(1 + CYCLE_WINDOW)..k - 1)
+            .any(|j| b[j] == b[k - 1] && r[k - 1] > 0.5 * r[j])
 }
 
 /// The Newton correction `dx = -K^-1 R` into `ws.dx`: a chord step with the kept factors
