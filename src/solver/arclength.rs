@@ -182,7 +182,8 @@ pub(super) fn trace(
             dt_pred = 0.5 * (to - t_a);
         }
         let converged = if t_a + dt_pred >= to {
-            if land(problem, settings, line, t_a, to, trial, ws, work) {
+            predict_along_tangent(t_a, to, trial, ws);
+            if land(problem, settings, line, to, trial, ws, work) {
                 return true;
             }
             landing_failed = true;
@@ -193,7 +194,8 @@ pub(super) fn trace(
             if t > to {
                 // The path crossed the target between the two arc points: land there from
                 // the interpolation, rather than commit history the step never reaches.
-                if land_between(problem, settings, line, t_a, t, to, trial, ws, work) {
+                interpolate(t_a, t, to, trial, ws);
+                if land(problem, settings, line, to, trial, ws, work) {
                     return true;
                 }
                 ws.trace.dxf.copy_from_slice(&ws.trace.pred);
@@ -275,23 +277,9 @@ fn accept_point(strain: &Strain, trial: &mut State, ws: &mut Workspace) {
     trial.strain = *strain;
 }
 
-/// Lands on `t = to` under strain control from the tangent prediction of the arc point
-/// `x_a` at `t_a`; returns whether Newton converged there.
-#[allow(clippy::too_many_arguments)]
-fn land(
-    problem: &Problem,
-    settings: &Settings,
-    line: StrainLine,
-    t_a: f64,
-    to: f64,
-    trial: &mut State,
-    ws: &mut Workspace,
-    work: &mut Traced,
-) -> bool {
-    let landing = Settings {
-        max_iterations: MAX_LANDING,
-        ..*settings
-    };
+/// The tangent prediction `x_a + (to - t_a) dx_f` of the arc point `x_a` at `t_a`, into
+/// `trial.unknowns`.
+fn predict_along_tangent(t_a: f64, to: f64, trial: &mut State, ws: &Workspace) {
     let trace = &ws.trace;
     for (x, (xa, dxf)) in trial
         .unknowns
@@ -300,38 +288,28 @@ fn land(
     {
         *x = xa + (to - t_a) * dxf;
     }
-    let outcome = newton(
-        problem,
-        &landing,
-        &line.at(to),
-        &mut trial.unknowns,
-        ws,
-        Mode::Newton,
-        false,
-    );
-    work.iterations += ws.residuals.len().saturating_sub(1) as u32;
-    outcome.is_ok()
 }
 
-/// Lands on `t = to` under strain control from the interpolation between the arc point
-/// `x_a` at `t_a` and the converged corrector point `trial.unknowns` at `t > to`; returns
-/// whether Newton converged there.
-#[allow(clippy::too_many_arguments)]
-fn land_between(
+/// The interpolation at `to` between the arc point `x_a` at `t_a` and the converged
+/// corrector point `trial.unknowns` at `t`, into `trial.unknowns`.
+fn interpolate(t_a: f64, t: f64, to: f64, trial: &mut State, ws: &Workspace) {
+    let s = (to - t_a) / (t - t_a);
+    for (x, xa) in trial.unknowns.iter_mut().zip(&ws.trace.xa) {
+        *x = xa + s * (*x - xa);
+    }
+}
+
+/// Lands on `t = to` under strain control from the prediction in `trial.unknowns`;
+/// returns whether Newton converged there.
+fn land(
     problem: &Problem,
     settings: &Settings,
     line: StrainLine,
-    t_a: f64,
-    t: f64,
     to: f64,
     trial: &mut State,
     ws: &mut Workspace,
     work: &mut Traced,
 ) -> bool {
-    let s = (to - t_a) / (t - t_a);
-    for (x, xa) in trial.unknowns.iter_mut().zip(&ws.trace.xa) {
-        *x = xa + s * (*x - xa);
-    }
     let landing = Settings {
         max_iterations: MAX_LANDING,
         ..*settings
