@@ -148,3 +148,71 @@ fn a_format_1_checkpoint_loads_through_the_safe_api() {
         "the state saved again differs"
     );
 }
+
+/// On a hard path whose increments end with interface points held against their gap
+/// (uniaxial stress, seed 1 of `common::hard_paths`), the state saved after such an
+/// increment records those points, and a restarted instance continues the path
+/// bit-identically from it. Loaded with no point held (as a format 7 state is), the next
+/// increment starts from another contact status and its response differs.
+#[test]
+fn a_state_with_points_held_against_their_gap_restarts_bit_identically() {
+    let case = common::hard_paths::case(1);
+    assert_eq!(case.kind, "uniaxial stress");
+    let scene = rve::scene::Scene::from_toml_str(&case.scene, common::repo("scenes")).unwrap();
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws = model.workspace();
+    let mut reference = Instance::new(model.clone());
+    let mut held_after = None;
+    let mut responses = Vec::new();
+    let mut saved = Vec::new();
+    for (k, eps) in case.targets.iter().enumerate() {
+        let r = reference
+            .update(*eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
+        reference.commit().unwrap();
+        saved.push(reference.save_state().unwrap());
+        if held_after.is_none() && r.report.held_points > 0 && k + 1 < case.targets.len() {
+            held_after = Some(k);
+        }
+        responses.push(r);
+    }
+    let k = held_after.expect("an increment ends with points held against their gap");
+    let held = responses[k].report.held_points;
+    let mut loaded = Instance::new(model.clone());
+    loaded.load_state(&saved[k]).unwrap();
+    let recorded: u32 = loaded
+        .committed()
+        .held_contact
+        .iter()
+        .map(|w| w.count_ones())
+        .sum();
+    assert_eq!(
+        recorded as usize, held,
+        "increment {k}: the state records its held points"
+    );
+    for (j, (eps, expected)) in case.targets.iter().zip(&responses).enumerate().skip(k + 1) {
+        let r = loaded
+            .update(*eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
+        loaded.commit().unwrap();
+        assert_eq!(bits(&r), bits(expected), "saved at {k}, increment {j}");
+    }
+
+    // The same bytes as format 7 (without the held status: its u64 length and words).
+    let bytes = &saved[k];
+    let nh = u64::from_le_bytes(bytes[24..32].try_into().unwrap()) as usize;
+    let held_bytes = 8 + 8 * nh.div_ceil(64);
+    let mut format7 = bytes[..bytes.len() - 4 - held_bytes].to_vec();
+    format7[8..12].copy_from_slice(&7u32.to_le_bytes());
+    let payload = (format7.len() - 40) as u64;
+    format7[32..40].copy_from_slice(&payload.to_le_bytes());
+    let checksum = crc32c::crc32c(&format7);
+    format7.extend_from_slice(&checksum.to_le_bytes());
+    let mut forgetful = Instance::new(model.clone());
+    forgetful.load_state(&format7).unwrap();
+    assert!(forgetful.committed().held_contact.iter().all(|&w| w == 0));
+    let r = forgetful
+        .update(case.targets[k + 1], &mut ws, TangentRequest::Consistent)
+        .unwrap();
+    assert_ne!(bits(&r), bits(&responses[k + 1]), "the held status matters");
+}
