@@ -113,6 +113,25 @@ fn a_refused_load_changes_nothing() {
     let e = inst.load_state(&foreign).unwrap_err();
     assert!(matches!(e, Error::StateMismatch { .. }), "{e}");
     assert!(e.to_string().contains("(another scene)"), "{e}");
+    // A contact status held at a point the model does not have (a spare bit of the
+    // bitset's last word, past the interface points).
+    let points = model.disc.interface_points();
+    let nh = u64::from_le_bytes(bytes[24..32].try_into().unwrap()) as usize;
+    assert!(
+        points % 64 != 0,
+        "the bitset has spare bits past the points"
+    );
+    let words = nh.div_ceil(64);
+    let mut beyond = bytes.clone();
+    let bitset = beyond.len() - 4 - 8 * words;
+    let byte = bitset + 8 * (points / 64) + (points % 64) / 8;
+    beyond[byte] |= 1 << (points % 8);
+    let body = beyond.len() - 4;
+    let checksum = crc32c::crc32c(&beyond[..body]);
+    beyond[body..].copy_from_slice(&checksum.to_le_bytes());
+    let e = inst.load_state(&beyond).unwrap_err();
+    assert!(matches!(e, Error::BadState { .. }), "{e}");
+    assert!(e.to_string().contains("beyond the model's"), "{e}");
 
     assert!(
         inst.committed() == &committed,

@@ -230,7 +230,8 @@ impl Instance {
                 ),
             });
         }
-        let held_beyond = (points..state.history.len()).any(|i| state.is_held(i));
+        // Any bit past the points, the spare bits of the last word included.
+        let held_beyond = (points..64 * state.held_contact.len()).any(|i| state.is_held(i));
         if held_beyond {
             return Err(Error::BadState {
                 reason: format!(
