@@ -111,12 +111,12 @@ pub(super) fn restore(ws: &mut Workspace) {
 
 /// Reads the gaps at the iterate `x` and switches every point whose gap disagrees with its
 /// held status and that has switched fewer than [`MAX_SWITCHES`] times in this loop; the
-/// pinned points only with `release_pinned` (an iterate that has not converged). Returns
+/// pinned points only with `switch_pinned` (an iterate that has not converged). Returns
 /// how many switched (the caller then evaluates `x` again).
 pub(super) fn update(
     problem: &Problem,
     x: &[f64],
-    release_pinned: bool,
+    switch_pinned: bool,
     ws: &mut Workspace,
 ) -> usize {
     let c = &mut ws.contact;
@@ -132,7 +132,7 @@ pub(super) fn update(
         .zip(&c.read)
         .zip(&c.pinned)
     {
-        if *held != read && *count < MAX_SWITCHES && (release_pinned || !pinned) {
+        if *held != read && *count < MAX_SWITCHES && (switch_pinned || !pinned) {
             *held = read;
             *count += 1;
             switched += 1;

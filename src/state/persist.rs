@@ -326,20 +326,17 @@ impl From<Format6> for State {
 
 /// Format 7: format 6 plus the fast path's [`LinearBranch`], without the held contact
 /// status (read as none held: the next update reads every point's status from its gap).
+/// Bincode writes a nested struct as its fields in order: the bytes are format 6's, then
+/// the branch.
 #[derive(Deserialize)]
 struct Format7 {
-    strain: [f64; 3],
-    unknowns: Vec<f64>,
-    history: Vec<f64>,
-    sensitivity: Sensitivity,
-    curvature: PathCurvature,
+    format6: Format6,
     linear: LinearBranch,
 }
 
 impl From<Format7> for State {
     fn from(old: Format7) -> Self {
-        let mut state = old_state(old.strain, old.unknowns, old.history, Some(old.sensitivity));
-        state.curvature = old.curvature;
+        let mut state = State::from(old.format6);
         state.linear = old.linear;
         state
     }
