@@ -249,14 +249,18 @@ fn stagnant(ws: &Workspace) -> bool {
     k > STAGNATION_WINDOW && ws.residuals[k - 1] > 0.5 * ws.residuals[k - 1 - STAGNATION_WINDOW]
 }
 
-/// Whether the last iterate's branch set is one of the [`CYCLE_WINDOW`] iterates' before
-/// it, with the residual not halved since that one.
+/// Whether the last iterate's branch set comes back from one of the [`CYCLE_WINDOW`]
+/// iterates' before it, with another set in between and the residual not halved since.
+/// An unchanged set is no cycle: the iterates then move on one smooth piece of the law
+/// (a line search that halves the step halves a linear residual exactly, and round-off
+/// would decide), and `stagnant` judges them.
 fn cycling(ws: &Workspace) -> bool {
     let (r, b) = (&ws.residuals, &ws.branch_signatures);
     let k = r.len();
-    k >= 2
-        && (k.saturating_sub(1 + CYCLE_WINDOW)..k - 1)
-            .any(|j| b[j] == b[k - 1] && r[k - 1] > 0.5 * r[j])
+    k >= 3
+        && (k.saturating_sub(1 + CYCLE_WINDOW)..k - 2).any(|j| {
+            b[j] == b[k - 1] && b[j + 1..k - 1].iter().any(|&s| s != b[k - 1]) && r[k - 1] > 0.5 * r[j]
+        })
 }
 
 /// The Newton correction `dx = -K^-1 R` into `ws.dx`: a chord step with the kept factors
