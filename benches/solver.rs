@@ -3,7 +3,7 @@
 //! For each scene, on one core: the median and mean time of a converged increment along
 //! the section 5.2.1 path (`eps_xx` to 2.2e-4 in 20 increments; the mean carries the
 //! post-peak increments), the iterations per increment, the median numeric factorization
-//! of the converged tangent as the solver does it (LL^T, a checked LBL^T when that fails,
+//! of the converged tangent as the solver does it (LDL^T, a checked LBL^T when that fails,
 //! LU last) with the share of each kind, and LU alone for comparison, the solve times with
 //! 1, 3 and 4 right-hand sides (the widths the solver uses: a chord correction, the
 //! tangent's sweep, a Newton correction with the tangent's columns), the bytes of one
@@ -43,7 +43,8 @@ struct Row {
     max_iterations: u32,
     factor_ms: f64,
     lu_ms: f64,
-    cholesky_share: f64,
+    ldlt_share: f64,
+    ldlt_indefinite_share: f64,
     lblt_share: f64,
     mean_increment_ms: f64,
     solve_ms: [f64; 3],
@@ -74,7 +75,8 @@ fn bench(path: &str) -> Row {
     let mut solve_columns = Vec::new();
     let mut max_iterations = 0;
     let mut lu_times = Vec::new();
-    let mut cholesky_count = 0usize;
+    let mut ldlt_count = 0usize;
+    let mut ldlt_indefinite_count = 0usize;
     let mut lblt_count = 0usize;
     // Repeat the path to get stable medians (more often for the small RVE, whose
     // increments are short enough for machine noise to matter).
@@ -110,7 +112,8 @@ fn bench(path: &str) -> Row {
                     .expect("factorization");
                 ft.push(t.elapsed().as_secs_f64());
                 match kind {
-                    FactorKind::Cholesky => cholesky_count += 1,
+                    FactorKind::Ldlt => ldlt_count += 1,
+                    FactorKind::LdltIndefinite => ldlt_indefinite_count += 1,
                     FactorKind::Lblt => lblt_count += 1,
                     FactorKind::Lu => {}
                 }
@@ -179,7 +182,8 @@ fn bench(path: &str) -> Row {
         increment_ms: 1e3 * median(&mut times),
         iterations: median(&mut iterations),
         max_iterations,
-        cholesky_share: cholesky_count as f64 / (5 * factor_times.len()) as f64,
+        ldlt_share: ldlt_count as f64 / (5 * factor_times.len()) as f64,
+        ldlt_indefinite_share: ldlt_indefinite_count as f64 / (5 * factor_times.len()) as f64,
         lblt_share: lblt_count as f64 / (5 * factor_times.len()) as f64,
         factor_ms: 1e3 * median(&mut factor_times),
         lu_ms: 1e3 * median(&mut lu_times),
@@ -200,13 +204,13 @@ fn main() {
         format!("{root}/scenes/paper_rve_fine.toml"),
     ];
     println!(
-        "| scene | unknowns | ITZ | median increment (ms) | mean increment (ms) | iterations (median / max) | factorizations (median / mean) | factorization used (ms) | LL^T / LBL^T share | LU alone (ms) | solve 1 / 3 / 4 columns (ms) | columns solved (median) | state bytes | update / (it x fact + solves) | update / (fact x factorizations + solves) |"
+        "| scene | unknowns | ITZ | median increment (ms) | mean increment (ms) | iterations (median / max) | factorizations (median / mean) | factorization used (ms) | LDL^T SPD / indefinite / LBL^T share | LU alone (ms) | solve 1 / 3 / 4 columns (ms) | columns solved (median) | state bytes | update / (it x fact + solves) | update / (fact x factorizations + solves) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for s in &scenes {
         let r = bench(s);
         println!(
-            "| {} | {} | {} | {:.3} | {:.3} | {} / {} | {} / {:.2} | {:.3} | {:.0} % / {:.0} % | {:.3} | {:.3} / {:.3} / {:.3} | {} | {} | {:.2} | {:.2} |",
+            "| {} | {} | {} | {:.3} | {:.3} | {} / {} | {} / {:.2} | {:.3} | {:.0} % / {:.0} % / {:.0} % | {:.3} | {:.3} / {:.3} / {:.3} | {} | {} | {:.2} | {:.2} |",
             r.name,
             r.unknowns,
             r.itz,
@@ -217,7 +221,8 @@ fn main() {
             r.factorizations,
             r.mean_factorizations,
             r.factor_ms,
-            100.0 * r.cholesky_share,
+            100.0 * r.ldlt_share,
+            100.0 * r.ldlt_indefinite_share,
             100.0 * r.lblt_share,
             r.lu_ms,
             r.solve_ms[0],

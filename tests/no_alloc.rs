@@ -5,7 +5,7 @@
 //! `rve::state::Sensitivity` and `rve::state::PathCurvature`), `Instance::update` and
 //! `commit` make no heap allocation, on loading, unloading and contact increments alike, and
 //! neither does the fast path (`rve::solver::fast_path`). The hot
-//! path is every increment that converges in one step with LL^T or checked LBL^T
+//! path is every increment that converges in one step with LDL^T or checked LBL^T
 //! factorizations; faer's supernodal LU (the last resort for indefinite tangents)
 //! allocates inside faer, and so do the fallbacks (path following, error messages), which
 //! are asserted to be rare instead.
@@ -79,10 +79,13 @@ fn update_and_commit_do_not_allocate() {
     );
 }
 
-/// The checked LBL^T (indefinite tangents) works in the workspace's buffers: after one
-/// warm-up call, factorizing and solving allocate nothing.
+/// The factorizations of indefinite tangents work in the workspace's buffers: after one
+/// warm-up call, factorizing and solving allocate nothing, both for the checked LDL^T
+/// (the converged tangent with its diagonal shifted down by a quarter of its mean) and
+/// for the checked LBL^T it falls back to (the same with every diagonal entry zero: the
+/// unpivoted LDL^T meets a zero pivot).
 #[test]
-fn checked_lblt_does_not_allocate() {
+fn checked_indefinite_factorizations_do_not_allocate() {
     use rve::solver::FactorKind;
 
     let scene = common::scene("scenes/paper_rve.toml");
@@ -91,8 +94,6 @@ fn checked_lblt_does_not_allocate() {
     let mut inst = Instance::new(model.clone());
     inst.update([1e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
         .unwrap();
-    // An indefinite matrix on the model's pattern: the converged tangent with its
-    // diagonal shifted down by a quarter of the mean diagonal.
     let pattern = &model.disc.pattern;
     let mean_diagonal = pattern
         .diagonal_slots
@@ -100,22 +101,32 @@ fn checked_lblt_does_not_allocate() {
         .map(|&s| ws.tangent_values()[s as usize])
         .sum::<f64>()
         / pattern.n as f64;
-    let mut values = ws.tangent_values().to_vec();
+    let mut shifted = ws.tangent_values().to_vec();
+    let mut zero_diagonal = ws.tangent_values().to_vec();
     for &s in &pattern.diagonal_slots {
-        values[s as usize] -= 0.25 * mean_diagonal;
+        shifted[s as usize] -= 0.25 * mean_diagonal;
+        zero_diagonal[s as usize] = 0.0;
     }
-    let mut rhs = vec![1.0; pattern.n];
-    let run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
-        let factorization = ws.factorization();
-        let kind = factorization
-            .factorize(&model.linear, &pattern.symbolic, &values, false)
-            .unwrap();
-        factorization.solve(&model.linear, rhs, 1);
-        kind
-    };
-    assert_eq!(run(&mut ws, &mut rhs), FactorKind::Lblt);
-    let mut kind = None;
-    let n = count_allocations(|| kind = Some(run(&mut ws, &mut rhs)));
-    assert_eq!(kind, Some(FactorKind::Lblt));
-    assert_eq!(n, 0, "{n} allocations in a checked LBL^T and its solve");
+    for (values, expected) in [
+        (shifted, FactorKind::LdltIndefinite),
+        (zero_diagonal, FactorKind::Lblt),
+    ] {
+        let mut rhs = vec![1.0; pattern.n];
+        let run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
+            let factorization = ws.factorization();
+            let kind = factorization
+                .factorize(&model.linear, &pattern.symbolic, &values, false)
+                .unwrap();
+            factorization.solve(&model.linear, rhs, 1);
+            kind
+        };
+        assert_eq!(run(&mut ws, &mut rhs), expected);
+        let mut kind = None;
+        let n = count_allocations(|| kind = Some(run(&mut ws, &mut rhs)));
+        assert_eq!(kind, Some(expected));
+        assert_eq!(
+            n, 0,
+            "{n} allocations in a checked {expected:?} and its solve"
+        );
+    }
 }

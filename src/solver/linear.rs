@@ -1,27 +1,32 @@
-//! Sparse direct solves with faer: Cholesky (LL^T) first, then a pivoted symmetric
-//! indefinite LBL^T checked by a probe solve, then LU with partial pivoting. Symbolic
-//! analyses once per model; numeric factors in reusable buffers.
+//! Sparse direct solves with faer: LDL^T without pivoting first, then a pivoted symmetric
+//! indefinite LBL^T, both checked by a probe solve when the matrix is indefinite, then LU
+//! with partial pivoting. Symbolic analyses once per model; numeric factors in reusable
+//! buffers.
 //!
 //! Why this chain: before the peak of the cohesive law, on unloading and in contact, the
-//! RVE tangent is symmetric positive definite, and LL^T is several times faster than LU
-//! here. After the peak the tangent can be indefinite and the minimal BC is a saddle
-//! point. faer's LL^T *reports* a non-positive pivot (`LltError`), so a failed LL^T is a
-//! reliable signal to leave it.
+//! RVE tangent is symmetric positive definite; after the peak it can be indefinite, and
+//! the minimal BC is a saddle point. The first try is faer's supernodal LDL^T on the AMD
+//! analysis, with no pivoting: the cost of LL^T. When every pivot `d_i` is positive the
+//! matrix is positive definite and the factorization is LL^T's up to the scaling
+//! `L D^1/2`, as stable; it is accepted as it is. When some pivot is negative, the factors
+//! still solve the system exactly in exact arithmetic (no zero pivot), but elimination
+//! without pivoting can grow elements, so the factors are *checked*: a probe `b = A p`
+//! with a fixed vector `p` is solved with them, and they are kept only if the residual
+//! `||b - A p^||` is below [`PROBE_TOLERANCE`] `||b||` (cost: one product and one solve).
+//! Past the peak this replaces an LL^T that ran until its first negative pivot and then
+//! an LBL^T (measured in `docs/solver.md`).
 //!
 //! The next try is faer's intranode LBL^T (Bunch-Kaufman pivoting inside each supernode),
-//! on the same AMD analysis as LL^T, forced supernodal (a simplicial LBL^T does not pivot
-//! and can return NaN silently). Pivoting limited to a supernode is not backward stable in
-//! general, and it reports nothing, so every LBL^T is *checked*: a probe `b = A p` with a
-//! fixed vector `p` is solved with the new factors, and the factors are kept only if the
-//! residual `||b - A p^||` is below [`PROBE_TOLERANCE`] `||b||` (cost: one product and one
-//! solve).
+//! on the same analysis, forced supernodal (a simplicial LBL^T does not pivot and can
+//! return NaN silently). Pivoting limited to a supernode is not backward stable in
+//! general either, and it reports nothing, so it is checked by the same probe.
 //!
 //! LU (COLAMD, partial pivoting) is the last resort, robust for any regular matrix. The
 //! numeric factorizations write into buffers that keep their size between calls: no
 //! allocation per iteration once they have grown (first call), except inside faer's
 //! supernodal LU.
 //!
-//! LL^T and LBL^T call faer's supernodal numeric kernels directly, on the lower triangle
+//! LDL^T and LBL^T call faer's supernodal numeric kernels directly, on the lower triangle
 //! of the AMD-permuted matrix, gathered through a map computed once per model
 //! ([`PermutedLower`]): faer's `SymbolicCholesky::factorize_numeric_*` would permute the
 //! matrix again at every factorization (a counting sort of the whole pattern). The gather
@@ -32,7 +37,7 @@ use faer::dyn_stack::{MemStack, StackReq};
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::supernodal::{self, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LltRef,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LdltRef,
     SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
@@ -45,23 +50,26 @@ use crate::error::{Error, Result};
 /// Which factorization a [`NumericFactor`] holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FactorKind {
-    Cholesky,
+    /// LDL^T without pivoting, every pivot positive: the matrix is positive definite.
+    Ldlt,
+    /// LDL^T without pivoting with negative pivots, checked by a probe solve.
+    LdltIndefinite,
     /// Symmetric indefinite, pivoted within supernodes, checked by a probe solve.
     Lblt,
     Lu,
 }
 
 /// Largest relative residual `||b - A p^|| / ||b||` of the probe solve that accepts an
-/// LBL^T factorization. A backward-stable solve leaves a residual of a small multiple of
-/// the unit round-off whatever the conditioning (4e-15 to 5e-14 measured on the paper
-/// RVEs past the peak); element growth in an elimination pivoted only within supernodes
-/// shows as far more.
+/// indefinite LDL^T or LBL^T factorization. A backward-stable solve leaves a residual of
+/// a small multiple of the unit round-off whatever the conditioning (4e-15 to 5e-14
+/// measured on the paper RVEs past the peak); element growth in an elimination not
+/// pivoted, or pivoted only within supernodes, shows as far more.
 pub const PROBE_TOLERANCE: f64 = 1e-10;
 
 /// Numeric factors, per workspace.
 pub struct NumericFactor {
     lu: NumericLu<usize, f64>,
-    /// LL^T or LBL^T factor values (same symbolic structure).
+    /// LDL^T or LBL^T factor values (same symbolic structure).
     l_values: Vec<f64>,
     /// The matrix's values on [`PermutedLower`]'s pattern, the kernels' input.
     permuted_values: Vec<f64>,
@@ -69,18 +77,20 @@ pub struct NumericFactor {
     lblt_subdiag: Vec<f64>,
     lblt_perm: Vec<usize>,
     lblt_perm_inv: Vec<usize>,
-    /// Probe vector and its image for checking an LBL^T factorization.
+    /// Probe vector and its image for checking an indefinite factorization.
     probe: Vec<f64>,
     probe_image: Vec<f64>,
     /// What the last successful factorization was, if any.
     pub current: Option<FactorKind>,
-    /// Numeric factorizations of any kind done with these buffers so far (an LL^T that
-    /// fails on a non-positive pivot is part of the LBL^T or LU that follows it).
+    /// Numeric factorizations of any kind done with these buffers so far (an LDL^T that
+    /// fails its check is part of the LBL^T or LU that follows it).
     pub count: u64,
     /// LU factorizations done with these buffers so far. faer's supernodal LU allocates
     /// internally (LL^T does not), so this counts the updates that left the
     /// allocation-free path.
     pub lu_count: u64,
+    /// Indefinite LDL^T factorizations accepted by the probe check so far.
+    pub ldlt_indefinite_count: u64,
     /// LBL^T factorizations accepted by the probe check so far.
     pub lblt_count: u64,
     /// Solves done with these buffers so far, by number of right-hand sides
@@ -93,10 +103,11 @@ pub struct NumericFactor {
 pub struct LinearSolver {
     lu: SymbolicLu<usize>,
     /// `None` when the system can never be positive definite (minimal BC multipliers).
+    /// The symmetric analysis that LDL^T and LBL^T share.
     cholesky: Option<Cholesky>,
 }
 
-/// The LL^T / LBL^T analysis: AMD ordering and supernodal structure, and where the
+/// The LDL^T / LBL^T analysis: AMD ordering and supernodal structure, and where the
 /// permuted lower triangle the numeric kernels read comes from.
 struct Cholesky {
     symbolic: SymbolicCholesky<usize>,
@@ -160,7 +171,7 @@ impl PermutedLower {
 }
 
 impl LinearSolver {
-    /// Analyses `pattern` (COLAMD for LU, AMD for LL^T). `spd_possible` is false for
+    /// Analyses `pattern` (COLAMD for LU, AMD for LDL^T). `spd_possible` is false for
     /// saddle-point systems.
     pub fn new(pattern: &SymbolicSparseColMat<usize>, spd_possible: bool) -> Result<Self> {
         // Supernodal where faer chooses it: simplicial LU would allocate nothing but is
@@ -223,6 +234,7 @@ impl LinearSolver {
             current: None,
             count: 0,
             lu_count: 0,
+            ldlt_indefinite_count: 0,
             lblt_count: 0,
             solves: [0; 5],
         }
@@ -237,7 +249,7 @@ impl LinearSolver {
         ];
         if let Some(c) = &self.cholesky {
             let s = c.supernodal();
-            reqs.push(supernodal::factorize_supernodal_numeric_llt_scratch::<
+            reqs.push(supernodal::factorize_supernodal_numeric_ldlt_scratch::<
                 usize,
                 f64,
             >(s, Par::Seq, Default::default()));
@@ -253,35 +265,28 @@ impl LinearSolver {
         StackReq::any_of(&reqs)
     }
 
-    /// Factorizes the matrix with `values` on `pattern`: LL^T when `try_cholesky` and the
-    /// matrix is positive definite, else a checked LBL^T, else LU. Returns the kind used.
+    /// Factorizes the matrix with `values` on `pattern`: LDL^T when `try_symmetric`
+    /// (accepted at once if positive definite, else checked), else a checked LBL^T, else
+    /// LU. Returns the kind used.
     pub fn factorize(
         &self,
         pattern: &SymbolicSparseColMat<usize>,
         values: &[f64],
         numeric: &mut NumericFactor,
-        try_cholesky: bool,
+        try_symmetric: bool,
         stack: &mut MemStack,
     ) -> std::result::Result<FactorKind, String> {
         numeric.current = None;
         numeric.count += 1;
         let a = SparseColMatRef::new(pattern.as_ref(), values);
-        if let (true, Some(c)) = (try_cholesky, &self.cholesky) {
+        if let (true, Some(c)) = (try_symmetric, &self.cholesky) {
             c.permuted.gather(values, &mut numeric.permuted_values);
-            let lower = SparseColMatRef::new(c.permuted.pattern.as_ref(), &numeric.permuted_values);
-            let ok = supernodal::factorize_supernodal_numeric_llt(
-                &mut numeric.l_values,
-                lower,
-                Default::default(),
-                c.supernodal(),
-                Par::Seq,
-                stack,
-                Default::default(),
-            )
-            .is_ok();
-            if ok {
-                numeric.current = Some(FactorKind::Cholesky);
-                return Ok(FactorKind::Cholesky);
+            if let Some(kind) = Self::ldlt(c, a, numeric, stack) {
+                if kind == FactorKind::LdltIndefinite {
+                    numeric.ldlt_indefinite_count += 1;
+                }
+                numeric.current = Some(kind);
+                return Ok(kind);
             }
             if Self::lblt_checked(c, a, numeric, stack) {
                 numeric.current = Some(FactorKind::Lblt);
@@ -297,6 +302,43 @@ impl LinearSolver {
         Ok(FactorKind::Lu)
     }
 
+    /// LDL^T without pivoting of `a` (gathered into `numeric.permuted_values`): `Ldlt` if
+    /// every pivot is positive, `LdltIndefinite` if some is negative and the probe solve
+    /// is accurate, `None` on a zero pivot or a failed probe.
+    fn ldlt(
+        c: &Cholesky,
+        a: SparseColMatRef<'_, usize, f64>,
+        numeric: &mut NumericFactor,
+        stack: &mut MemStack,
+    ) -> Option<FactorKind> {
+        let lower = SparseColMatRef::new(c.permuted.pattern.as_ref(), &numeric.permuted_values);
+        supernodal::factorize_supernodal_numeric_ldlt(
+            &mut numeric.l_values,
+            lower,
+            Default::default(),
+            c.supernodal(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        )
+        .ok()?;
+        match pivot_signs(c.supernodal(), &numeric.l_values) {
+            PivotSigns::Positive => Some(FactorKind::Ldlt),
+            PivotSigns::Indefinite => {
+                let factor = LdltRef::new(&c.symbolic, &numeric.l_values);
+                let accurate = probe_solve_is_accurate(
+                    a,
+                    &mut numeric.probe,
+                    &mut numeric.probe_image,
+                    |rhs, stack| factor.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack),
+                    stack,
+                );
+                accurate.then_some(FactorKind::LdltIndefinite)
+            }
+            PivotSigns::Singular => None,
+        }
+    }
+
     /// Intranode LBL^T of `a` into `numeric`, accepted only if a probe solve is accurate
     /// (see the module docs).
     fn lblt_checked(
@@ -306,7 +348,7 @@ impl LinearSolver {
         stack: &mut MemStack,
     ) -> bool {
         let n = a.nrows();
-        // `numeric.permuted_values` still holds the gather of the failed LL^T.
+        // `numeric.permuted_values` still holds the gather of the refused LDL^T.
         let lower = SparseColMatRef::new(c.permuted.pattern.as_ref(), &numeric.permuted_values);
         supernodal::factorize_supernodal_numeric_intranode_lblt(
             &mut numeric.l_values,
@@ -319,32 +361,19 @@ impl LinearSolver {
             stack,
             Default::default(),
         );
-        // Probe p_i = 1 + (i mod 7) / 7: no structure shared with the mesh ordering.
-        for (i, p) in numeric.probe.iter_mut().enumerate() {
-            *p = 1.0 + (i % 7) as f64 / 7.0;
-        }
-        numeric.probe_image.iter_mut().for_each(|v| *v = 0.0);
-        add_product(a, 1.0, &numeric.probe, &mut numeric.probe_image);
-        let b_norm = norm(&numeric.probe_image);
-        numeric.probe.copy_from_slice(&numeric.probe_image);
         let factor = IntranodeLbltRef::new(
             &c.symbolic,
             &numeric.l_values,
             &numeric.lblt_subdiag,
             PermRef::new_checked(&numeric.lblt_perm, &numeric.lblt_perm_inv, n),
         );
-        factor.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut numeric.probe, n, 1),
-            Par::Seq,
+        probe_solve_is_accurate(
+            a,
+            &mut numeric.probe,
+            &mut numeric.probe_image,
+            |rhs, stack| factor.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack),
             stack,
-        );
-        if numeric.probe.iter().any(|v| !v.is_finite()) {
-            return false;
-        }
-        // Residual b - A p^, written over the image b.
-        add_product(a, -1.0, &numeric.probe, &mut numeric.probe_image);
-        norm(&numeric.probe_image) <= PROBE_TOLERANCE * b_norm
+        )
     }
 
     /// Solves in place for `ncols` right-hand sides stored column-major in `rhs`, with the
@@ -362,8 +391,11 @@ impl LinearSolver {
         }
         let b = MatMut::from_column_major_slice_mut(rhs, n, ncols);
         match (numeric.current, &self.cholesky) {
-            (Some(FactorKind::Cholesky), Some(c)) => LltRef::new(&c.symbolic, &numeric.l_values)
-                .solve_in_place_with_conj(Conj::No, b, Par::Seq, stack),
+            (Some(FactorKind::Ldlt | FactorKind::LdltIndefinite), Some(c)) => LdltRef::new(
+                &c.symbolic,
+                &numeric.l_values,
+            )
+            .solve_in_place_with_conj(Conj::No, b, Par::Seq, stack),
             (Some(FactorKind::Lblt), Some(c)) => IntranodeLbltRef::new(
                 &c.symbolic,
                 &numeric.l_values,
@@ -376,6 +408,63 @@ impl LinearSolver {
             _ => {}
         }
     }
+}
+
+/// The signs of the pivots `d_i` of a supernodal LDL^T.
+#[derive(Debug, PartialEq, Eq)]
+enum PivotSigns {
+    Positive,
+    /// Some pivot negative, none zero or not finite.
+    Indefinite,
+    /// Some pivot zero or not finite.
+    Singular,
+}
+
+/// Reads the pivots of the LDL^T factor `l` (each supernode's diagonal block is unit lower
+/// triangular with `D` stored on its diagonal).
+fn pivot_signs(s: &SymbolicSupernodalCholesky<usize>, l: &[f64]) -> PivotSigns {
+    let (begin, end, value_ptr) = (s.supernode_begin(), s.supernode_end(), s.col_ptr_for_val());
+    let mut signs = PivotSigns::Positive;
+    for k in 0..s.n_supernodes() {
+        let width = end[k] - begin[k];
+        let rows = (value_ptr[k + 1] - value_ptr[k]) / width;
+        for j in 0..width {
+            let d = l[value_ptr[k] + j * rows + j];
+            if d == 0.0 || !d.is_finite() {
+                return PivotSigns::Singular;
+            } else if d < 0.0 {
+                signs = PivotSigns::Indefinite;
+            }
+        }
+    }
+    signs
+}
+
+/// Solves the probe `b = A p`, `p_i = 1 + (i mod 7) / 7` (no structure shared with the
+/// mesh ordering), with `solve` and tells whether `||b - A p^|| <= PROBE_TOLERANCE ||b||`.
+/// `probe` and `image` are scratch of length `n`.
+fn probe_solve_is_accurate(
+    a: SparseColMatRef<'_, usize, f64>,
+    probe: &mut [f64],
+    image: &mut [f64],
+    solve: impl FnOnce(MatMut<'_, f64>, &mut MemStack),
+    stack: &mut MemStack,
+) -> bool {
+    let n = a.nrows();
+    for (i, p) in probe.iter_mut().enumerate() {
+        *p = 1.0 + (i % 7) as f64 / 7.0;
+    }
+    image.iter_mut().for_each(|v| *v = 0.0);
+    add_product(a, 1.0, probe, image);
+    let b_norm = norm(image);
+    probe.copy_from_slice(image);
+    solve(MatMut::from_column_major_slice_mut(probe, n, 1), stack);
+    if probe.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    // Residual b - A p^, written over the image b.
+    add_product(a, -1.0, probe, image);
+    norm(image) <= PROBE_TOLERANCE * b_norm
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -398,6 +487,23 @@ mod tests {
     use faer::dyn_stack::MemBuffer;
     use faer::sparse::Pair;
 
+    /// The `n x n` matrix with entries `(row, col, value)`: its pattern and values.
+    fn from_triplets(
+        n: usize,
+        entries: &[(usize, usize, f64)],
+    ) -> (SymbolicSparseColMat<usize>, Vec<f64>) {
+        let pairs: Vec<_> = entries
+            .iter()
+            .map(|&(row, col, _)| Pair { row, col })
+            .collect();
+        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).unwrap();
+        let entry_values: Vec<f64> = entries.iter().map(|e| e.2).collect();
+        let matrix =
+            faer::sparse::SparseColMat::new_from_argsort(symbolic.clone(), &argsort, &entry_values)
+                .unwrap();
+        (symbolic, matrix.val().to_vec())
+    }
+
     /// 5-point Laplacian on an `m x m` grid shifted by `-shift`: positive definite for a
     /// shift below its smallest eigenvalue (0.045 for m = 20), indefinite for a shift inside
     /// the spectrum (0, 8).
@@ -418,19 +524,10 @@ mod tests {
                 }
             }
         }
-        let pairs: Vec<_> = entries
-            .iter()
-            .map(|&(row, col, _)| Pair { row, col })
-            .collect();
-        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).unwrap();
-        let entry_values: Vec<f64> = entries.iter().map(|e| e.2).collect();
-        let matrix =
-            faer::sparse::SparseColMat::new_from_argsort(symbolic.clone(), &argsort, &entry_values)
-                .unwrap();
-        (symbolic, matrix.val().to_vec())
+        from_triplets(n, &entries)
     }
 
-    /// A shifted Laplacian factorized by a solver with or without the LL^T analysis.
+    /// A shifted Laplacian factorized by a solver with or without the symmetric analysis.
     struct Factorized {
         pattern: SymbolicSparseColMat<usize>,
         values: Vec<f64>,
@@ -475,30 +572,82 @@ mod tests {
     /// Factorizes, solves `A x = A p` and returns the kind and the relative error of `x`.
     fn solve_error(m: usize, shift: f64) -> (FactorKind, f64) {
         let mut f = factorized(m, shift, true);
-        let n = m * m;
-        let exact: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
-        let a = SparseColMatRef::new(f.pattern.as_ref(), &f.values);
-        let mut x = vec![0.0; n];
-        add_product(a, 1.0, &exact, &mut x);
-        f.linear
-            .solve_in_place(&mut f.numeric, &mut x, 1, MemStack::new(&mut f.stack));
-        let err: f64 = x.iter().zip(&exact).map(|(a, b)| (a - b) * (a - b)).sum();
-        (f.kind, err.sqrt() / norm(&exact))
+        (f.kind, f.relative_solve_error())
+    }
+
+    impl Factorized {
+        /// Solves `A x = A p` with the factors, `p_i = ((37 i) mod 11) - 5`, and returns
+        /// `||x - p|| / ||p||`.
+        fn relative_solve_error(&mut self) -> f64 {
+            let n = self.pattern.nrows();
+            let exact: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+            let a = SparseColMatRef::new(self.pattern.as_ref(), &self.values);
+            let mut x = vec![0.0; n];
+            add_product(a, 1.0, &exact, &mut x);
+            self.linear.solve_in_place(
+                &mut self.numeric,
+                &mut x,
+                1,
+                MemStack::new(&mut self.stack),
+            );
+            let err: f64 = x.iter().zip(&exact).map(|(a, b)| (a - b) * (a - b)).sum();
+            err.sqrt() / norm(&exact)
+        }
     }
 
     #[test]
-    fn positive_definite_uses_cholesky() {
+    fn positive_definite_uses_ldlt() {
         let (kind, err) = solve_error(20, 0.0);
-        assert_eq!(kind, FactorKind::Cholesky);
+        assert_eq!(kind, FactorKind::Ldlt);
         assert!(err < 1e-12, "error {err:e}");
     }
 
     #[test]
-    fn indefinite_uses_checked_lblt_and_solves_accurately() {
+    fn indefinite_uses_checked_ldlt_and_solves_accurately() {
         // Shift 1.3 puts ~10 % of the 400 eigenvalues below zero; none near zero.
         let (kind, err) = solve_error(20, 1.3);
-        assert_eq!(kind, FactorKind::Lblt);
+        assert_eq!(kind, FactorKind::LdltIndefinite);
         assert!(err < 1e-10, "error {err:e}");
+    }
+
+    /// The 2 x 2 blocks `[[d, 1], [1, d]]` on the diagonal, chained by small couplings:
+    /// regular and indefinite for a small `d`.
+    fn small_diagonal(blocks: usize, d: f64) -> (SymbolicSparseColMat<usize>, Vec<f64>) {
+        let n = 2 * blocks;
+        let mut entries = Vec::new();
+        for k in 0..n {
+            entries.push((k, k, d));
+        }
+        for b in 0..blocks {
+            entries.push((2 * b, 2 * b + 1, 1.0));
+            entries.push((2 * b + 1, 2 * b, 1.0));
+            if b + 1 < blocks {
+                entries.push((2 * b + 1, 2 * b + 2, 0.1));
+                entries.push((2 * b + 2, 2 * b + 1, 0.1));
+            }
+        }
+        from_triplets(n, &entries)
+    }
+
+    /// Without pivoting, a zero pivot stops LDL^T and a tiny one grows the factors by
+    /// `1/d`: either way the pivoted LBL^T takes over, and solves accurately.
+    #[test]
+    fn a_zero_or_tiny_pivot_falls_back_to_checked_lblt() {
+        for d in [0.0, 1e-13] {
+            lblt_solves_small_diagonal(d);
+        }
+    }
+
+    fn lblt_solves_small_diagonal(d: f64) {
+        let (pattern, values) = small_diagonal(6, d);
+        let mut f = factorized_with(pattern, values, true);
+        assert_eq!(f.kind, FactorKind::Lblt);
+        assert_eq!(
+            (f.numeric.ldlt_indefinite_count, f.numeric.lblt_count),
+            (0, 1)
+        );
+        let err = f.relative_solve_error();
+        assert!(err < 1e-12, "d = {d:e}: error {err:e}");
     }
 
     #[test]
@@ -519,10 +668,10 @@ mod tests {
         let mut reference = vec![0.0; c.symbolic.len_val()];
         let mut stack = MemBuffer::new(
             c.symbolic
-                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+                .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
         );
         c.symbolic
-            .factorize_numeric_llt(
+            .factorize_numeric_ldlt(
                 &mut reference,
                 SparseColMatRef::new(pattern.as_ref(), &values),
                 Side::Lower,
@@ -532,7 +681,7 @@ mod tests {
                 Default::default(),
             )
             .unwrap();
-        assert_eq!(f.kind, FactorKind::Cholesky);
+        assert_eq!(f.kind, FactorKind::Ldlt);
         assert!(
             f.numeric.l_values == reference,
             "factors differ from faer's"

@@ -259,7 +259,9 @@ fn cycling(ws: &Workspace) -> bool {
     let k = r.len();
     k >= 3
         && (k.saturating_sub(1 + CYCLE_WINDOW)..k - 2).any(|j| {
-            b[j] == b[k - 1] && b[j + 1..k - 1].iter().any(|&s| s != b[k - 1]) && r[k - 1] > 0.5 * r[j]
+            b[j] == b[k - 1]
+                && b[j + 1..k - 1].iter().any(|&s| s != b[k - 1])
+                && r[k - 1] > 0.5 * r[j]
         })
 }
 

@@ -59,10 +59,14 @@ pub struct IncrementReport {
     pub substeps: u32,
     /// Numeric factorizations, including any for the tangent.
     pub factorizations: u32,
-    /// How many of them were LU (indefinite tangent, the checked LBL^T refused).
+    /// How many of them were LU (indefinite tangent, both symmetric factorizations
+    /// refused by their check).
     pub lu_factorizations: u32,
-    /// How many were the checked LBL^T (indefinite tangent); the rest were LL^T.
+    /// How many were the checked LBL^T (indefinite tangent, the LDL^T refused).
     pub lblt_factorizations: u32,
+    /// How many were an LDL^T of an indefinite tangent, accepted by its check; the rest
+    /// were LDL^T of a positive definite tangent.
+    pub indefinite_ldlt_factorizations: u32,
     /// Limit points of the macro strain along the equilibrium paths traced by path
     /// following in this update (a snap-back of the RVE response counts two: the strain
     /// passes a maximum, then a minimum). Non-zero means the strain-controlled equilibrium
