@@ -60,7 +60,7 @@
 //! that runs away (measured: an unloading branch followed to `t = -5e5` over 400 points).
 
 use super::contact;
-use super::newton::{newton, Mode};
+use super::newton::{comes_back, newton, Mode};
 use super::problem::{dot, Problem, Strain};
 use super::settings::Settings;
 use super::workspace::{TraceBuffers, Workspace};
@@ -375,9 +375,9 @@ fn correct(
             return Some(t);
         }
         let branches = ws.current.counts.branch_signature;
-        let cycling = recent
-            .iter()
-            .any(|&(b, r)| b == branches && rnorm >= 0.5 * r);
+        let earlier =
+            (1..=CYCLE_WINDOW.min(iteration)).map(|back| recent[(iteration - back) % CYCLE_WINDOW]);
+        let cycling = comes_back(earlier, branches, rnorm);
         let out_of_budget = match released {
             Some((at, _)) => iteration >= at + RELEASE_BUDGET,
             None => iteration >= MAX_CORRECTOR,

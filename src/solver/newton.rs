@@ -250,19 +250,37 @@ fn stagnant(ws: &Workspace) -> bool {
 }
 
 /// Whether the last iterate's branch set comes back from one of the [`CYCLE_WINDOW`]
-/// iterates' before it, with another set in between and the residual not halved since.
-/// An unchanged set is no cycle: the iterates then move on one smooth piece of the law
-/// (a line search that halves the step halves a linear residual exactly, and round-off
-/// would decide), and `stagnant` judges them.
+/// iterates' before it (see [`comes_back`]).
 fn cycling(ws: &Workspace) -> bool {
     let (r, b) = (&ws.residuals, &ws.branch_signatures);
-    let k = r.len();
-    k >= 3
-        && (k.saturating_sub(1 + CYCLE_WINDOW)..k - 2).any(|j| {
-            b[j] == b[k - 1]
-                && b[j + 1..k - 1].iter().any(|&s| s != b[k - 1])
-                && r[k - 1] > 0.5 * r[j]
-        })
+    let Some(k) = r.len().checked_sub(1) else {
+        return false;
+    };
+    let earlier = (k.saturating_sub(CYCLE_WINDOW)..k)
+        .rev()
+        .map(|j| (b[j], r[j]));
+    comes_back(earlier, b[k], r[k])
+}
+
+/// Whether an iterate with branch set `branches` and residual norm `residual` comes back
+/// to the set of one of the `earlier` iterates (most recent first) with another set in
+/// between, the residual not halved since that one: a semismooth Newton cycling between
+/// branch sets, which never converges. An unchanged set is no cycle: the iterates then
+/// move on one smooth piece of the law (a line search that halves the step halves a
+/// linear residual exactly, and round-off would decide), and stagnation judges them.
+pub(super) fn comes_back(
+    earlier: impl Iterator<Item = (u64, f64)>,
+    branches: u64,
+    residual: f64,
+) -> bool {
+    let mut another_between = false;
+    for (set, r) in earlier {
+        if set == branches && another_between && residual > 0.5 * r {
+            return true;
+        }
+        another_between |= set != branches;
+    }
+    false
 }
 
 /// The Newton correction `dx = -K^-1 R` into `ws.dx`: a chord step with the kept factors
