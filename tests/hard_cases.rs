@@ -109,23 +109,29 @@ fn every_hard_case_completes() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// With a solver cut down to fail often (3 Newton iterations, 10 secant iterations, no
-/// bisection of its own), every failure is clean and the host loop finishes every path
-/// (measured: 54 retries over the 40 paths, 23 of them on one path).
+/// With a solver cut down to fail (3 Newton iterations, no bisection of its own, no secant
+/// iterations), every failure is clean and the host loop finishes every path (measured:
+/// 18 retries on 3 of the 40 paths, 15 of them on one). Path following is left on: without
+/// it a snap-back cannot be passed at any step. With 10 secant iterations, as before
+/// the corrector's cycle rule changed (`newton::comes_back`), nothing fails any more.
 #[test]
 fn host_retries_finish_after_clean_failures() {
-    let mut retries = 0;
+    let (mut retries, mut paths_retried) = (0, 0);
     for seed in 0..40 {
         let case = hard_paths::case(seed);
         let model = model_of(
             &case,
-            "max_iterations = 3\nmax_substep_depth = 0\nmax_secant_iterations = 10",
+            "max_iterations = 3\nmax_substep_depth = 0\nmax_secant_iterations = 0",
         );
         let mut inst = Instance::new(model);
         let run = host_follow(&mut inst, &case.targets)
             .unwrap_or_else(|e| panic!("seed {seed} ({}, {}): {e}", case.kind, case.setup));
         retries += run.retries;
+        paths_retried += usize::from(run.retries > 0);
     }
-    // The cut-down solver does fail: the retries are exercised.
-    assert!(retries >= 20, "only {retries} failures to retry");
+    // The cut-down solver does fail: the retries are exercised, on more than one path.
+    assert!(
+        retries >= 10 && paths_retried >= 3,
+        "only {retries} failures to retry, on {paths_retried} paths"
+    );
 }
