@@ -58,6 +58,8 @@
 //! path traced back past the start of the whole strain history
 //! (`t < -(|eps_0| / |Delta eps| + 1)`) is lost: it has left the snap-back for a branch
 //! that runs away (measured: an unloading branch followed to `t = -5e5` over 400 points).
+//! So is a trace that only creeps on: more than [`CRAWL_POINTS`] points in a row on arcs
+//! under [`CRAWL_FRACTION`] of the first.
 
 use super::contact;
 use super::newton::{comes_back, newton, Mode};
@@ -79,6 +81,12 @@ const MAX_CUTS: u32 = 8;
 /// the tracer is stuck at a corner of the path, where tiny points converge at once and
 /// longer ones do not.
 const MIN_LENGTH: f64 = 1e-4;
+/// The path is lost, too, after more than `CRAWL_POINTS` converged points in a row on
+/// arcs shorter than `CRAWL_FRACTION` of the first: converged points reset the cuts, so
+/// a trace can creep along a corner of the path without ever reaching [`MIN_LENGTH`]
+/// (measured: about 100 points, 397 factorizations, over 1 % of one increment).
+const CRAWL_FRACTION: f64 = 1e-2;
+const CRAWL_POINTS: u32 = 8;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;
 /// Iterations back over which a corrector looks for a branch set that comes back.
@@ -131,8 +139,8 @@ fn load_direction(problem: &Problem, ws: &mut Workspace) {
 /// `trial.history`), and `ws.current`/`ws.factorization` belong to it, as after a
 /// converged Newton loop. Returns `false` when the path cannot be followed (singular
 /// system, [`MAX_CUTS`] failed attempts in a row, an arc length below [`MIN_LENGTH`] of
-/// the first, [`MAX_POINTS`] exhausted, an arc point back past the start of the strain
-/// history); `trial` then holds the last converged arc point,
+/// the first, a crawl ([`CRAWL_POINTS`]), [`MAX_POINTS`] exhausted, an arc point back past
+/// the start of the strain history); `trial` then holds the last converged arc point,
 /// still valid. `work` counts what was done either way.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn trace(
@@ -159,6 +167,7 @@ pub(super) fn trace(
     let mut direction_ready = false;
     // Whether a landing from the current arc point has failed.
     let mut landing_failed = false;
+    let mut crawl = 0u32;
     for _ in 0..MAX_POINTS {
         ws.history_start.copy_from_slice(&trial.history);
         contact::hold_state(problem, trial, ws);
@@ -214,6 +223,16 @@ pub(super) fn trace(
                 t_a = t;
                 landing_failed = false;
                 work.points += 1;
+                // A trace that only creeps on (at a corner of the path where every longer
+                // arc fails) is lost as well.
+                crawl = if length < CRAWL_FRACTION * first_length {
+                    crawl + 1
+                } else {
+                    0
+                };
+                if crawl > CRAWL_POINTS {
+                    return false;
+                }
                 length *= GROWTH;
                 true
             }
