@@ -44,7 +44,7 @@ struct Row {
     factor_ms: f64,
     lu_ms: f64,
     ldlt_share: f64,
-    ldlt_indefinite_share: f64,
+    indefinite_ldlt_share: f64,
     lblt_share: f64,
     mean_increment_ms: f64,
     solve_ms: [f64; 3],
@@ -76,7 +76,7 @@ fn bench(path: &str) -> Row {
     let mut max_iterations = 0;
     let mut lu_times = Vec::new();
     let mut ldlt_count = 0usize;
-    let mut ldlt_indefinite_count = 0usize;
+    let mut indefinite_ldlt_count = 0usize;
     let mut lblt_count = 0usize;
     // Repeat the path to get stable medians (more often for the small RVE, whose
     // increments are short enough for machine noise to matter).
@@ -113,7 +113,7 @@ fn bench(path: &str) -> Row {
                 ft.push(t.elapsed().as_secs_f64());
                 match kind {
                     FactorKind::Ldlt => ldlt_count += 1,
-                    FactorKind::LdltIndefinite => ldlt_indefinite_count += 1,
+                    FactorKind::LdltIndefinite => indefinite_ldlt_count += 1,
                     FactorKind::Lblt => lblt_count += 1,
                     FactorKind::Lu => {}
                 }
@@ -183,7 +183,7 @@ fn bench(path: &str) -> Row {
         iterations: median(&mut iterations),
         max_iterations,
         ldlt_share: ldlt_count as f64 / (5 * factor_times.len()) as f64,
-        ldlt_indefinite_share: ldlt_indefinite_count as f64 / (5 * factor_times.len()) as f64,
+        indefinite_ldlt_share: indefinite_ldlt_count as f64 / (5 * factor_times.len()) as f64,
         lblt_share: lblt_count as f64 / (5 * factor_times.len()) as f64,
         factor_ms: 1e3 * median(&mut factor_times),
         lu_ms: 1e3 * median(&mut lu_times),
@@ -222,7 +222,7 @@ fn main() {
             r.mean_factorizations,
             r.factor_ms,
             100.0 * r.ldlt_share,
-            100.0 * r.ldlt_indefinite_share,
+            100.0 * r.indefinite_ldlt_share,
             100.0 * r.lblt_share,
             r.lu_ms,
             r.solve_ms[0],

@@ -167,6 +167,7 @@ pub(super) fn trace(
     let mut direction_ready = false;
     // Whether a landing from the current arc point has failed.
     let mut landing_failed = false;
+    // Converged points in a row on arcs under `CRAWL_FRACTION` of the first.
     let mut crawl = 0u32;
     for _ in 0..MAX_POINTS {
         ws.history_start.copy_from_slice(&trial.history);

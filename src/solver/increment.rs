@@ -128,7 +128,7 @@ fn solve_from(
         numeric.count,
         numeric.lu_count,
         numeric.lblt_count,
-        numeric.ldlt_indefinite_count,
+        numeric.indefinite_ldlt_count,
     );
     trial.copy_solution_from(committed);
     contact::configure(problem, ws);
@@ -187,7 +187,7 @@ fn solve_from(
     report.factorizations = (numeric.count - before.0) as u32;
     report.lu_factorizations = (numeric.lu_count - before.1) as u32;
     report.lblt_factorizations = (numeric.lblt_count - before.2) as u32;
-    report.indefinite_ldlt_factorizations = (numeric.ldlt_indefinite_count - before.3) as u32;
+    report.indefinite_ldlt_factorizations = (numeric.indefinite_ldlt_count - before.3) as u32;
     Ok(Solved {
         report,
         condensed: solved,

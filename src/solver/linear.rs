@@ -86,11 +86,11 @@ pub struct NumericFactor {
     /// fails its check is part of the LBL^T or LU that follows it).
     pub count: u64,
     /// LU factorizations done with these buffers so far. faer's supernodal LU allocates
-    /// internally (LL^T does not), so this counts the updates that left the
+    /// internally (LDL^T and LBL^T do not), so this counts the updates that left the
     /// allocation-free path.
     pub lu_count: u64,
     /// Indefinite LDL^T factorizations accepted by the probe check so far.
-    pub ldlt_indefinite_count: u64,
+    pub indefinite_ldlt_count: u64,
     /// LBL^T factorizations accepted by the probe check so far.
     pub lblt_count: u64,
     /// Solves done with these buffers so far, by number of right-hand sides
@@ -104,17 +104,17 @@ pub struct LinearSolver {
     lu: SymbolicLu<usize>,
     /// `None` when the system can never be positive definite (minimal BC multipliers).
     /// The symmetric analysis that LDL^T and LBL^T share.
-    cholesky: Option<Cholesky>,
+    symmetric: Option<SymmetricAnalysis>,
 }
 
 /// The LDL^T / LBL^T analysis: AMD ordering and supernodal structure, and where the
 /// permuted lower triangle the numeric kernels read comes from.
-struct Cholesky {
+struct SymmetricAnalysis {
     symbolic: SymbolicCholesky<usize>,
     permuted: PermutedLower,
 }
 
-impl Cholesky {
+impl SymmetricAnalysis {
     fn supernodal(&self) -> &SymbolicSupernodalCholesky<usize> {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(s) => s,
@@ -125,7 +125,7 @@ impl Cholesky {
     }
 }
 
-/// The lower triangle of `P A P^T` for the fill-reducing permutation `P` of the Cholesky
+/// The lower triangle of `P A P^T` for the fill-reducing permutation `P` of the symmetric
 /// analysis, as a pattern with sorted rows, and for each of its entries the index of the
 /// value of `A` (full pattern, both triangles) it takes: entry `(i, j)` of `A` with
 /// `i >= j` goes to `(max(p_i, p_j), min(p_i, p_j))`, as in faer's own permutation.
@@ -179,7 +179,7 @@ impl LinearSolver {
         // only runs on indefinite tangents, past the peak.
         let lu = factorize_symbolic_lu(pattern.as_ref(), Default::default())
             .map_err(|e| Error::Mesh(format!("symbolic LU analysis failed: {e:?}")))?;
-        let cholesky = if spd_possible && pattern.nrows() > 0 {
+        let symmetric = if spd_possible && pattern.nrows() > 0 {
             let symbolic = factorize_symbolic_cholesky(
                 pattern.as_ref(),
                 Side::Lower,
@@ -207,22 +207,22 @@ impl LinearSolver {
                 }
             };
             let permuted = PermutedLower::new(pattern, inverse);
-            Some(Cholesky { symbolic, permuted })
+            Some(SymmetricAnalysis { symbolic, permuted })
         } else {
             None
         };
-        Ok(LinearSolver { lu, cholesky })
+        Ok(LinearSolver { lu, symmetric })
     }
 
     /// Empty numeric buffers for this solver.
     pub fn numeric(&self) -> NumericFactor {
-        let n = self.cholesky.as_ref().map_or(0, |c| c.symbolic.nrows());
+        let n = self.symmetric.as_ref().map_or(0, |c| c.symbolic.nrows());
         NumericFactor {
             lu: NumericLu::new(),
-            l_values: vec![0.0; self.cholesky.as_ref().map_or(0, |c| c.symbolic.len_val())],
+            l_values: vec![0.0; self.symmetric.as_ref().map_or(0, |c| c.symbolic.len_val())],
             permuted_values: vec![
                 0.0;
-                self.cholesky
+                self.symmetric
                     .as_ref()
                     .map_or(0, |c| c.permuted.source.len())
             ],
@@ -234,7 +234,7 @@ impl LinearSolver {
             current: None,
             count: 0,
             lu_count: 0,
-            ldlt_indefinite_count: 0,
+            indefinite_ldlt_count: 0,
             lblt_count: 0,
             solves: [0; 5],
         }
@@ -247,7 +247,7 @@ impl LinearSolver {
                 .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
             self.lu.solve_in_place_scratch::<f64>(ncols, Par::Seq),
         ];
-        if let Some(c) = &self.cholesky {
+        if let Some(c) = &self.symmetric {
             let s = c.supernodal();
             reqs.push(supernodal::factorize_supernodal_numeric_ldlt_scratch::<
                 usize,
@@ -279,11 +279,11 @@ impl LinearSolver {
         numeric.current = None;
         numeric.count += 1;
         let a = SparseColMatRef::new(pattern.as_ref(), values);
-        if let (true, Some(c)) = (try_symmetric, &self.cholesky) {
+        if let (true, Some(c)) = (try_symmetric, &self.symmetric) {
             c.permuted.gather(values, &mut numeric.permuted_values);
             if let Some(kind) = Self::ldlt(c, a, numeric, stack) {
                 if kind == FactorKind::LdltIndefinite {
-                    numeric.ldlt_indefinite_count += 1;
+                    numeric.indefinite_ldlt_count += 1;
                 }
                 numeric.current = Some(kind);
                 return Ok(kind);
@@ -306,7 +306,7 @@ impl LinearSolver {
     /// every pivot is positive, `LdltIndefinite` if some is negative and the probe solve
     /// is accurate, `None` on a zero pivot or a failed probe.
     fn ldlt(
-        c: &Cholesky,
+        c: &SymmetricAnalysis,
         a: SparseColMatRef<'_, usize, f64>,
         numeric: &mut NumericFactor,
         stack: &mut MemStack,
@@ -342,7 +342,7 @@ impl LinearSolver {
     /// Intranode LBL^T of `a` into `numeric`, accepted only if a probe solve is accurate
     /// (see the module docs).
     fn lblt_checked(
-        c: &Cholesky,
+        c: &SymmetricAnalysis,
         a: SparseColMatRef<'_, usize, f64>,
         numeric: &mut NumericFactor,
         stack: &mut MemStack,
@@ -390,7 +390,7 @@ impl LinearSolver {
             numeric.solves[ncols.min(4)] += 1;
         }
         let b = MatMut::from_column_major_slice_mut(rhs, n, ncols);
-        match (numeric.current, &self.cholesky) {
+        match (numeric.current, &self.symmetric) {
             (Some(FactorKind::Ldlt | FactorKind::LdltIndefinite), Some(c)) => LdltRef::new(
                 &c.symbolic,
                 &numeric.l_values,
@@ -643,7 +643,7 @@ mod tests {
         let mut f = factorized_with(pattern, values, true);
         assert_eq!(f.kind, FactorKind::Lblt);
         assert_eq!(
-            (f.numeric.ldlt_indefinite_count, f.numeric.lblt_count),
+            (f.numeric.indefinite_ldlt_count, f.numeric.lblt_count),
             (0, 1)
         );
         let err = f.relative_solve_error();
@@ -664,7 +664,7 @@ mod tests {
             }
         }
         let f = factorized_with(pattern.clone(), values.clone(), true);
-        let c = f.linear.cholesky.as_ref().unwrap();
+        let c = f.linear.symmetric.as_ref().unwrap();
         let mut reference = vec![0.0; c.symbolic.len_val()];
         let mut stack = MemBuffer::new(
             c.symbolic
@@ -689,7 +689,7 @@ mod tests {
     }
 
     #[test]
-    fn without_cholesky_analysis_lu_is_used() {
+    fn without_symmetric_analysis_lu_is_used() {
         let f = factorized(10, 1.3, false);
         assert_eq!(f.kind, FactorKind::Lu);
         assert_eq!((f.numeric.lu_count, f.numeric.lblt_count), (1, 0));
