@@ -52,9 +52,10 @@
 //!
 //! # When a trace stops
 //! Besides the cuts below, a corrector gives up once its iterates cycle: an interface
-//! branch set it had within the last [`CYCLE_WINDOW`] iterations comes back without the
-//! residual having halved since (a semismooth Newton cycling between branch sets never
-//! converges; the arc is halved at once instead of after [`MAX_CORRECTOR`] iterations). A
+//! branch set it had within the last [`CYCLE_WINDOW`] iterations comes back, after another
+//! set, without the residual having halved since (`newton::comes_back`: a semismooth Newton
+//! cycling between branch sets never converges; the arc is halved at once instead of
+//! after [`MAX_CORRECTOR`] iterations). A
 //! path traced back past the start of the whole strain history
 //! (`t < -(|eps_0| / |Delta eps| + 1)`) is lost: it has left the snap-back for a branch
 //! that runs away (measured: an unloading branch followed to `t = -5e5` over 400 points).
