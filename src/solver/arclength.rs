@@ -50,6 +50,20 @@
 //! status with no release, the cycle of the penalty study lands on another post-snap
 //! equilibrium; releasing the closed points as well costs 9 % more factorizations.
 //!
+//! # Corners
+//! The sign of each step keeps the way the path went (`direction`): right at a smooth
+//! limit point, where `t` turns with the tangent. But the law has kinks (a point leaves
+//! the loading envelope, eq. 23, for its unloading secant, eq. 24), and the path can turn
+//! at a *corner*: there `t` reverses through a kink, the tangent at the arc point belongs
+//! to the path coming in, and every corrector along it cycles between two branch sets, at
+//! any arc length. After [`CORNER_CUTS`] failed attempts in a row at one arc point, the
+//! next attempt goes the other way. Its point is accepted only if some interface point
+//! still loads there (the path goes on dissipating): otherwise it is the elastic unloading
+//! branch of the arc point, which leads back past the start of the strain history, and the
+//! attempt counts as failed. Measured in `docs/solver.md`: the three paper-law increments
+//! that lost their trace at such a corner and fell back to secant iterations (175-195
+//! factorizations) take 118-137.
+//!
 //! # When a trace stops
 //! Besides the cuts below, a corrector gives up once its iterates cycle: an interface
 //! branch set it had within the last [`CYCLE_WINDOW`] iterations comes back, after another
@@ -88,6 +102,9 @@ const MIN_LENGTH: f64 = 1e-4;
 /// (measured: about 100 points, 397 factorizations, over 1 % of one increment).
 const CRAWL_FRACTION: f64 = 1e-2;
 const CRAWL_POINTS: u32 = 8;
+/// Failed attempts in a row at one arc point after which the next attempt goes the other
+/// way, once (see "Corners" in the module docs).
+const CORNER_CUTS: u32 = 3;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;
 /// Iterations back over which a corrector looks for a branch set that comes back.
@@ -186,13 +203,16 @@ pub(super) fn trace(
             length = (to - from) * dxf_norm / 8.0;
             first_length = length;
         }
-        let mut dt_pred = direction(work.points, &ws.trace) * length / dxf_norm;
-        if landing_failed && t_a + dt_pred >= to {
+        // Round a corner: once, the other way (see "Corners" in the module docs).
+        let reverse = cuts == CORNER_CUTS;
+        let sign = if reverse { -1.0 } else { 1.0 };
+        let mut dt_pred = sign * direction(work.points, &ws.trace) * length / dxf_norm;
+        if landing_failed && t_a + dt_pred >= to && !reverse {
             // Not the same landing again: an arc step half way to the target.
             length = 0.5 * (to - t_a) * dxf_norm;
             dt_pred = 0.5 * (to - t_a);
         }
-        let converged = if t_a + dt_pred >= to {
+        let converged = if t_a + dt_pred >= to && !reverse {
             predict_along_tangent(t_a, to, trial, ws);
             if land(problem, settings, line, to, trial, ws, work) {
                 return true;
@@ -202,7 +222,11 @@ pub(super) fn trace(
         } else if let Some(t) = correct(
             problem, tolerance, line, t_a, dt_pred, length, trial, ws, work,
         ) {
-            if t > to {
+            if reverse && ws.current.counts.loading == 0 {
+                // Back along an elastic branch, not round a corner: a failed attempt.
+                ws.trace.dxf.copy_from_slice(&ws.trace.pred);
+                false
+            } else if t > to {
                 // The path crossed the target between the two arc points: land there from
                 // the interpolation, rather than commit history the step never reaches.
                 interpolate(t_a, t, to, trial, ws);
