@@ -45,6 +45,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
+use super::supernodal_solve;
 use crate::error::{Error, Result};
 
 /// Which factorization a [`NumericFactor`] holds.
@@ -80,6 +81,8 @@ pub struct NumericFactor {
     /// Probe vector and its image for checking an indefinite factorization.
     probe: Vec<f64>,
     probe_image: Vec<f64>,
+    /// Scratch of the LDL^T substitutions (`supernodal_solve`).
+    solve_scratch: Vec<f64>,
     /// What the last successful factorization was, if any.
     pub current: Option<FactorKind>,
     /// Numeric factorizations of any kind done with these buffers so far (an LDL^T that
@@ -231,6 +234,12 @@ impl LinearSolver {
             lblt_perm_inv: vec![0; n],
             probe: vec![0.0; n],
             probe_image: vec![0.0; n],
+            solve_scratch: vec![
+                0.0;
+                self.symmetric
+                    .as_ref()
+                    .map_or(0, |c| supernodal_solve::scratch_len(c.supernodal()))
+            ],
             current: None,
             count: 0,
             lu_count: 0,
@@ -325,12 +334,21 @@ impl LinearSolver {
         match pivot_signs(c.supernodal(), &numeric.l_values) {
             PivotSigns::Positive => Some(FactorKind::Ldlt),
             PivotSigns::Indefinite => {
-                let factor = LdltRef::new(&c.symbolic, &numeric.l_values);
+                let (l, scratch) = (&numeric.l_values, &mut numeric.solve_scratch);
                 let accurate = probe_solve_is_accurate(
                     a,
                     &mut numeric.probe,
                     &mut numeric.probe_image,
-                    |rhs, stack| factor.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack),
+                    |rhs, _| {
+                        supernodal_solve::solve_ldlt(
+                            c.supernodal(),
+                            c.symbolic.perm(),
+                            l,
+                            rhs,
+                            1,
+                            scratch,
+                        )
+                    },
                     stack,
                 );
                 accurate.then_some(FactorKind::LdltIndefinite)
@@ -371,7 +389,10 @@ impl LinearSolver {
             a,
             &mut numeric.probe,
             &mut numeric.probe_image,
-            |rhs, stack| factor.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack),
+            |rhs, stack| {
+                let rhs = MatMut::from_column_major_slice_mut(rhs, n, 1);
+                factor.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack)
+            },
             stack,
         )
     }
@@ -388,6 +409,17 @@ impl LinearSolver {
         let n = rhs.len() / ncols.max(1);
         if numeric.current.is_some() {
             numeric.solves[ncols.min(4)] += 1;
+        }
+        let ldlt = matches!(
+            numeric.current,
+            Some(FactorKind::Ldlt | FactorKind::LdltIndefinite)
+        );
+        if let (true, 1, Some(c)) = (ldlt, ncols, &self.symmetric) {
+            // One column: plain loops (`supernodal_solve`); faer's kernels pay off from
+            // three columns on (measured in docs/solver.md).
+            let (l, scratch) = (&numeric.l_values, &mut numeric.solve_scratch);
+            supernodal_solve::solve_ldlt(c.supernodal(), c.symbolic.perm(), l, rhs, 1, scratch);
+            return;
         }
         let b = MatMut::from_column_major_slice_mut(rhs, n, ncols);
         match (numeric.current, &self.symmetric) {
@@ -447,10 +479,9 @@ fn probe_solve_is_accurate(
     a: SparseColMatRef<'_, usize, f64>,
     probe: &mut [f64],
     image: &mut [f64],
-    solve: impl FnOnce(MatMut<'_, f64>, &mut MemStack),
+    solve: impl FnOnce(&mut [f64], &mut MemStack),
     stack: &mut MemStack,
 ) -> bool {
-    let n = a.nrows();
     for (i, p) in probe.iter_mut().enumerate() {
         *p = 1.0 + (i % 7) as f64 / 7.0;
     }
@@ -458,7 +489,7 @@ fn probe_solve_is_accurate(
     add_product(a, 1.0, probe, image);
     let b_norm = norm(image);
     probe.copy_from_slice(image);
-    solve(MatMut::from_column_major_slice_mut(probe, n, 1), stack);
+    solve(probe, stack);
     if probe.iter().any(|v| !v.is_finite()) {
         return false;
     }
@@ -686,6 +717,44 @@ mod tests {
             f.numeric.l_values == reference,
             "factors differ from faer's"
         );
+    }
+
+    /// The plain-loop substitutions agree with faer's `LdltRef` solve to round-off, column
+    /// by column, on a definite and an indefinite factor.
+    #[test]
+    fn ldlt_substitutions_agree_with_faers_solve() {
+        for (shift, kind) in [(0.0, FactorKind::Ldlt), (1.3, FactorKind::LdltIndefinite)] {
+            let mut f = factorized(20, shift, true);
+            assert_eq!(f.kind, kind);
+            let n = f.pattern.nrows();
+            for width in 1..=5 {
+                let rhs: Vec<f64> = (0..n * width)
+                    .map(|i| ((i * 29) % 13) as f64 - 6.0 + 0.1 * (i / n) as f64)
+                    .collect();
+                let c = f.linear.symmetric.as_ref().unwrap();
+                let mut ours = rhs.clone();
+                supernodal_solve::solve_ldlt(
+                    c.supernodal(),
+                    c.symbolic.perm(),
+                    &f.numeric.l_values,
+                    &mut ours,
+                    width,
+                    &mut f.numeric.solve_scratch,
+                );
+                let mut faers = rhs.clone();
+                let mut stack =
+                    MemBuffer::new(c.symbolic.solve_in_place_scratch::<f64>(width, Par::Seq));
+                LdltRef::new(&c.symbolic, &f.numeric.l_values).solve_in_place_with_conj(
+                    Conj::No,
+                    MatMut::from_column_major_slice_mut(&mut faers, n, width),
+                    Par::Seq,
+                    MemStack::new(&mut stack),
+                );
+                let diff: f64 = ours.iter().zip(&faers).map(|(a, b)| (a - b).powi(2)).sum();
+                let rel = diff.sqrt() / norm(&faers);
+                assert!(rel < 1e-13, "shift {shift}, width {width}: {rel:e}");
+            }
+        }
     }
 
     #[test]

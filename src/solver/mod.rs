@@ -20,6 +20,7 @@ mod newton;
 mod predictor;
 mod problem;
 mod settings;
+mod supernodal_solve;
 mod tangent;
 mod workspace;
 
