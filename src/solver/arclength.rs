@@ -64,6 +64,16 @@
 //! that lost their trace at such a corner and fell back to secant iterations (175-195
 //! factorizations) take 118-137.
 //!
+//! If that fails too, the next attempt goes forward again over a long arc,
+//! [`CORNER_JUMP`] times the last one that converged at the arc point. Short arcs end
+//! near the corner, where the points about to change branch sit on `delta = delta_max`
+//! and the corrector cannot settle on a branch set; a long arc ends where the set is
+//! clear again. Its point is accepted like any other; one past the target lands from the
+//! interpolation. Measured in `docs/solver.md`: on the robustness paths it fires three
+//! times (tension along y with both laws, a uniaxial stress with the cohesive shear),
+//! every time reaching past the target and landing, instead of a lost trace and secant
+//! iterations (118-375 factorizations; 66-90 now).
+//!
 //! # When a trace stops
 //! Besides the cuts below, a corrector gives up once its iterates cycle: an interface
 //! branch set it had within the last [`CYCLE_WINDOW`] iterations comes back, after another
@@ -73,8 +83,8 @@
 //! path traced back past the start of the whole strain history
 //! (`t < -(|eps_0| / |Delta eps| + 1)`) is lost: it has left the snap-back for a branch
 //! that runs away (measured: an unloading branch followed to `t = -5e5` over 400 points).
-//! So is a trace that only creeps on: more than [`CRAWL_POINTS`] points in a row on arcs
-//! under [`CRAWL_FRACTION`] of the first.
+//! So is a trace that only creeps on: more than [`CRAWL_ATTEMPTS`] attempts in a row on
+//! arcs under [`CRAWL_FRACTION`] of the first.
 
 use super::contact;
 use super::newton::{comes_back, newton, Mode};
@@ -96,15 +106,21 @@ const MAX_CUTS: u32 = 8;
 /// the tracer is stuck at a corner of the path, where tiny points converge at once and
 /// longer ones do not.
 const MIN_LENGTH: f64 = 1e-4;
-/// The path is lost, too, after more than `CRAWL_POINTS` converged points in a row on
-/// arcs shorter than `CRAWL_FRACTION` of the first: converged points reset the cuts, so
-/// a trace can creep along a corner of the path without ever reaching [`MIN_LENGTH`]
-/// (measured: about 100 points, 397 factorizations, over 1 % of one increment).
-const CRAWL_FRACTION: f64 = 1e-2;
-const CRAWL_POINTS: u32 = 8;
+/// The path is lost, too, after more than `CRAWL_ATTEMPTS` attempts in a row (converged
+/// or not) on arcs shorter than `CRAWL_FRACTION` of the first: converged points reset the
+/// cuts, so a trace can creep along a corner of the path, alternating tiny points and
+/// failures, without ever reaching [`MIN_LENGTH`] (measured: about 100 points, 397
+/// factorizations, over 1 % of one increment; counting converged points alone on arcs
+/// under 1/100 of the first left one of 40 attempts, 200 factorizations, see
+/// `docs/solver.md`).
+const CRAWL_FRACTION: f64 = 0.1;
+const CRAWL_ATTEMPTS: u32 = 8;
 /// Failed attempts in a row at one arc point after which the next attempt goes the other
-/// way, once (see "Corners" in the module docs).
+/// way, once, and the one after it forward over a long arc (see "Corners" in the module
+/// docs).
 const CORNER_CUTS: u32 = 3;
+/// The long arc over a corner, as a multiple of the last arc that converged there.
+const CORNER_JUMP: f64 = 4.0;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;
 /// Iterations back over which a corrector looks for a branch set that comes back.
@@ -185,7 +201,7 @@ pub(super) fn trace(
     let mut direction_ready = false;
     // Whether a landing from the current arc point has failed.
     let mut landing_failed = false;
-    // Converged points in a row on arcs under `CRAWL_FRACTION` of the first.
+    // Attempts in a row on arcs under `CRAWL_FRACTION` of the first.
     let mut crawl = 0u32;
     for _ in 0..MAX_POINTS {
         ws.history_start.copy_from_slice(&trial.history);
@@ -203,8 +219,14 @@ pub(super) fn trace(
             length = (to - from) * dxf_norm / 8.0;
             first_length = length;
         }
-        // Round a corner: once, the other way (see "Corners" in the module docs).
+        // Round a corner: once the other way, then once forward over a long arc (see
+        // "Corners" in the module docs). `length` has been halved at every cut.
         let reverse = cuts == CORNER_CUTS;
+        let jump = cuts == CORNER_CUTS + 1;
+        let cut_length = length;
+        if jump {
+            length *= CORNER_JUMP * f64::from(1u32 << cuts);
+        }
         let sign = if reverse { -1.0 } else { 1.0 };
         let mut dt_pred = sign * direction(work.points, &ws.trace) * length / dxf_norm;
         if landing_failed && t_a + dt_pred >= to && !reverse {
@@ -249,16 +271,6 @@ pub(super) fn trace(
                 t_a = t;
                 landing_failed = false;
                 work.points += 1;
-                // A trace that only creeps on (at a corner of the path where every longer
-                // arc fails) is lost as well.
-                crawl = if length < CRAWL_FRACTION * first_length {
-                    crawl + 1
-                } else {
-                    0
-                };
-                if crawl > CRAWL_POINTS {
-                    return false;
-                }
                 length *= GROWTH;
                 true
             }
@@ -272,10 +284,23 @@ pub(super) fn trace(
         // factorization); after a failed corrector or landing, the one at `x_a` (a landing
         // leaves `dxf` alone).
         direction_ready = true;
+        // A trace that only creeps on (at a corner of the path where every longer arc
+        // fails) is lost as well.
+        crawl = if length < CRAWL_FRACTION * first_length {
+            crawl + 1
+        } else {
+            0
+        };
+        if crawl > CRAWL_ATTEMPTS {
+            return false;
+        }
         if converged {
             cuts = 0;
         } else {
             trial.unknowns.copy_from_slice(&ws.trace.xa);
+            if jump {
+                length = cut_length;
+            }
             length *= 0.5;
             cuts += 1;
             if cuts > MAX_CUTS || length < MIN_LENGTH * first_length {
