@@ -110,9 +110,9 @@ const MIN_LENGTH: f64 = 1e-4;
 /// or not) on arcs shorter than `CRAWL_FRACTION` of the first: converged points reset the
 /// cuts, so a trace can creep along a corner of the path, alternating tiny points and
 /// failures, without ever reaching [`MIN_LENGTH`] (measured: about 100 points, 397
-/// factorizations, over 1 % of one increment; counting converged points alone on arcs
-/// under 1/100 of the first left one of 40 attempts, 200 factorizations, see
-/// `docs/solver.md`).
+/// factorizations, over 1 % of one increment; counting only converged points on arcs
+/// under 1/100 of the first, one trace still crept over about 40 attempts, 200
+/// factorizations: `docs/solver.md`).
 const CRAWL_FRACTION: f64 = 0.1;
 const CRAWL_ATTEMPTS: u32 = 8;
 /// Failed attempts in a row at one arc point after which the next attempt goes the other
