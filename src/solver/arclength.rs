@@ -173,7 +173,7 @@ fn load_direction(problem: &Problem, ws: &mut Workspace) {
 /// `trial.history`), and `ws.current`/`ws.factorization` belong to it, as after a
 /// converged Newton loop. Returns `false` when the path cannot be followed (singular
 /// system, [`MAX_CUTS`] failed attempts in a row, an arc length below [`MIN_LENGTH`] of
-/// the first, a crawl ([`CRAWL_POINTS`]), [`MAX_POINTS`] exhausted, an arc point back past
+/// the first, a crawl ([`CRAWL_ATTEMPTS`]), [`MAX_POINTS`] exhausted, an arc point back past
 /// the start of the strain history); `trial` then holds the last converged arc point,
 /// still valid. `work` counts what was done either way.
 #[allow(clippy::too_many_arguments)]
