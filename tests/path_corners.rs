@@ -7,7 +7,9 @@
 //! tangent cycles between two interface branch sets at any arc length. Without the
 //! corner rule the path was lost there and secant iterations from the increment's start
 //! found another equilibrium, with no certified snap (`limit_points` 0). With it the
-//! trace goes round the corner, passes one more limit point, and lands.
+//! trace goes round the corner, passes one more limit point, and lands. In 32
+//! increments the snap meets a corner the reversal cannot round, and a long forward arc
+//! crosses it.
 
 mod common;
 
@@ -16,11 +18,13 @@ use std::sync::Arc;
 use rve::scene::Scene;
 use rve::{Instance, Model, TangentRequest};
 
-#[test]
-fn a_trace_goes_round_a_corner_and_lands() {
+/// The paper RVE pulled along y to 2.6e-4 in `increments` increments, without the fast
+/// path: per increment, the stress along y, the certified limit points and the
+/// factorizations.
+fn pull_along_y(increments: u32) -> Vec<(f64, u32, u32)> {
     let text = common::paper_scene_with(&[
         ("to = [2.2e-4, 0.0, 0.0]", "to = [0.0, 2.6e-4, 0.0]"),
-        ("increments = 20", "increments = 40"),
+        ("increments = 20", &format!("increments = {increments}")),
     ]);
     let mut scene = Scene::from_toml_str(&text, ".").unwrap_or_else(|e| panic!("{e}\n{text}"));
     scene.spec.solver.fast_path = false;
@@ -33,29 +37,58 @@ fn a_trace_goes_round_a_corner_and_lands() {
             .update(eps, &mut ws, TangentRequest::Consistent)
             .unwrap_or_else(|e| panic!("increment {}: {e}", steps.len() + 1));
         inst.commit().unwrap();
-        steps.push((r.stress[1], r.report.limit_points, r.report.iterations));
+        steps.push((r.stress[1], r.report.limit_points, r.report.factorizations));
     }
+    steps
+}
+
+/// The first increment after the stress peak whose stress falls below 0.8 of the peak:
+/// its index (from 1), limit points and factorizations.
+fn snap_after_peak(steps: &[(f64, u32, u32)]) -> (usize, u32, u32) {
     let peak = (0..steps.len())
         .max_by(|&a, &b| steps[a].0.total_cmp(&steps[b].0))
         .unwrap();
-    let (stress, limit_points, iterations) = steps[peak + 1];
+    let snap = (peak + 1..steps.len())
+        .find(|&k| steps[k].0 < 0.8 * steps[peak].0)
+        .unwrap_or_else(|| panic!("no snap after the peak at increment {}", peak + 1));
+    let (stress, limit_points, factorizations) = steps[snap];
     println!(
-        "peak at increment {}: {:.4}; next: {stress:.4}, {limit_points} limit points, {iterations} iterations",
+        "peak at increment {}: {:.4}; snap at {}: {stress:.4}, {limit_points} limit points, \
+         {factorizations} factorizations",
         peak + 1,
-        steps[peak].0
+        steps[peak].0,
+        snap + 1
     );
-    assert_eq!(peak + 1, 33, "the stress peak moved");
-    assert!(
-        stress < 0.8 * steps[peak].0,
-        "increment {} does not snap: {stress} after {}",
-        peak + 2,
-        steps[peak].0
-    );
+    (snap + 1, limit_points, factorizations)
+}
+
+#[test]
+fn a_trace_goes_round_a_corner_and_lands() {
+    let (snap, limit_points, _) = snap_after_peak(&pull_along_y(40));
+    assert_eq!(snap, 34, "the snap moved");
     // Landed from a traced path with both limit points of the first snap and the one
     // after the corner: the trace was not lost (a lost trace certifies none).
     assert!(
         limit_points >= 3,
-        "increment {}: {limit_points} limit points certified",
-        peak + 2
+        "increment {snap}: {limit_points} limit points certified"
+    );
+}
+
+/// In 32 increments the snap (increment 28) meets a second corner at `t` = -1.12 where
+/// the reversal only finds the elastic unloading branch. Short forward arcs cycle there;
+/// the long arc over the corner (`CORNER_JUMP`) reaches past the target and lands.
+/// Before it, the trace was lost and secant iterations landed with no certified limit
+/// point, in 118 factorizations.
+#[test]
+fn a_long_arc_crosses_a_corner_the_reversal_cannot_round() {
+    let (snap, limit_points, factorizations) = snap_after_peak(&pull_along_y(32));
+    assert_eq!(snap, 28, "the snap moved");
+    assert!(
+        limit_points >= 2,
+        "increment {snap}: {limit_points} limit points certified (the trace was lost)"
+    );
+    assert!(
+        factorizations < 100,
+        "increment {snap}: {factorizations} factorizations"
     );
 }
