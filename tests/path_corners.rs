@@ -9,7 +9,8 @@
 //! found another equilibrium, with no certified snap (`limit_points` 0). With it the
 //! trace goes round the corner, passes one more limit point, and lands. In 32
 //! increments the snap meets a corner the reversal cannot round, and a long forward arc
-//! crosses it.
+//! crosses it. On hard case 118 the reversal finds the nearly elastic unloading branch,
+//! which is refused, and the long arc crosses that corner too.
 
 mod common;
 
@@ -90,5 +91,41 @@ fn a_long_arc_crosses_a_corner_the_reversal_cannot_round() {
     assert!(
         factorizations < 100,
         "increment {snap}: {factorizations} factorizations"
+    );
+}
+
+/// Hard case 118 (a turn from x to y on an ellipse RVE): at the corner of its worst
+/// increment the reversed attempt converges with 1 of 80 points still loading, the
+/// nearly elastic unloading branch. Kept, it led the trace back to `t = -8.5` and the
+/// increment ended in secant iterations (197 iterations, no certified limit point); refused
+/// (`CORNER_LOADING`), the long arc crosses the corner and the trace lands.
+#[test]
+fn a_reversal_onto_a_nearly_elastic_branch_is_refused() {
+    let case = common::hard_paths::case(118);
+    let scene = Scene::from_toml_str(&case.scene, common::repo("scenes")).unwrap();
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut ws = model.workspace();
+    let mut inst = Instance::new(model.clone());
+    let mut worst = (0, 0, 0);
+    for (k, &eps) in case.targets.iter().enumerate() {
+        let r = inst
+            .update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap_or_else(|e| panic!("increment {}: {e}", k + 1));
+        inst.commit().unwrap();
+        if r.report.factorizations > worst.1 {
+            worst = (k + 1, r.report.factorizations, r.report.limit_points);
+        }
+    }
+    let (increment, factorizations, limit_points) = worst;
+    println!(
+        "worst increment {increment}: {factorizations} factorizations, {limit_points} limit points"
+    );
+    assert!(
+        limit_points >= 2,
+        "increment {increment}: {limit_points} limit points certified (the trace was lost)"
+    );
+    assert!(
+        factorizations < 150,
+        "increment {increment}: {factorizations} factorizations"
     );
 }

@@ -57,10 +57,11 @@
 //! at a *corner*: there `t` reverses through a kink, the tangent at the arc point belongs
 //! to the path coming in, and every corrector along it cycles between two branch sets, at
 //! any arc length. After [`CORNER_CUTS`] failed attempts in a row at one arc point, the
-//! next attempt goes the other way. Its point is accepted only if some interface point
-//! still loads there (the path goes on dissipating): otherwise it is the elastic unloading
-//! branch of the arc point, which leads back past the start of the strain history, and the
-//! attempt counts as failed. Measured in `docs/solver.md`: the three paper-law increments
+//! next attempt goes the other way. Its point is accepted only if interface points still
+//! load there (the path goes on dissipating), at least [`CORNER_LOADING`] of those loading
+//! at the arc point: otherwise it is the (nearly) elastic unloading branch of the arc
+//! point, which leads back past the start of the strain history, and the attempt counts
+//! as failed. Measured in `docs/solver.md`: the three paper-law increments
 //! that lost their trace at such a corner and fell back to secant iterations (175-195
 //! factorizations) take 118-137.
 //!
@@ -121,6 +122,11 @@ const CRAWL_ATTEMPTS: u32 = 8;
 const CORNER_CUTS: u32 = 3;
 /// The long arc over a corner, as a multiple of the last arc that converged there.
 const CORNER_JUMP: f64 = 4.0;
+/// A point reached the other way round a corner is kept only if at least this fraction
+/// of the arc point's loading points still load there (and at least one): fewer, and it
+/// lies on the nearly elastic unloading branch of the arc point (measured: 1 of 80
+/// points loading, and the trace ran back to `t = -8.5`, `docs/solver.md`).
+const CORNER_LOADING: f64 = 0.1;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;
 /// Iterations back over which a corrector looks for a branch set that comes back.
@@ -203,12 +209,17 @@ pub(super) fn trace(
     let mut landing_failed = false;
     // Attempts in a row on arcs under `CRAWL_FRACTION` of the first.
     let mut crawl = 0u32;
+    // Interface points loading at the arc point `x_a`.
+    let mut point_loading = 0usize;
     for _ in 0..MAX_POINTS {
         ws.history_start.copy_from_slice(&trial.history);
         contact::hold_state(problem, trial, ws);
         ws.trace.xa.copy_from_slice(&trial.unknowns);
-        if !direction_ready && !tangent_at(problem, &line.at(t_a), trial, ws) {
-            return false;
+        if !direction_ready {
+            if !tangent_at(problem, &line.at(t_a), trial, ws) {
+                return false;
+            }
+            point_loading = ws.current.counts.loading;
         }
         let dxf_norm = dot(&ws.trace.dxf, &ws.trace.dxf).sqrt();
         if !(dxf_norm.is_finite() && dxf_norm > 0.0) {
@@ -244,7 +255,9 @@ pub(super) fn trace(
         } else if let Some(t) = correct(
             problem, tolerance, line, t_a, dt_pred, length, trial, ws, work,
         ) {
-            if reverse && ws.current.counts.loading == 0 {
+            let loading = ws.current.counts.loading;
+            if reverse && (loading == 0 || (loading as f64) < CORNER_LOADING * point_loading as f64)
+            {
                 // Back along an elastic branch, not round a corner: a failed attempt.
                 ws.trace.dxf.copy_from_slice(&ws.trace.pred);
                 false
@@ -258,6 +271,7 @@ pub(super) fn trace(
                 ws.trace.dxf.copy_from_slice(&ws.trace.pred);
                 false
             } else {
+                point_loading = ws.current.counts.loading;
                 accept_point(&line.at(t), trial, ws);
                 contact::record_held(problem, trial, ws);
                 let forward = t > t_a;
