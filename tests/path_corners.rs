@@ -19,9 +19,24 @@ use std::sync::Arc;
 use rve::scene::Scene;
 use rve::{Instance, Model, TangentRequest};
 
+/// Follows `targets` with one update per increment from the committed state: per
+/// increment, the stress along y, the certified limit points and the factorizations.
+fn follow(model: Arc<Model>, targets: impl IntoIterator<Item = [f64; 3]>) -> Vec<(f64, u32, u32)> {
+    let mut ws = model.workspace();
+    let mut inst = Instance::new(model);
+    let mut steps = Vec::new();
+    for eps in targets {
+        let r = inst
+            .update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap_or_else(|e| panic!("increment {}: {e}", steps.len() + 1));
+        inst.commit().unwrap();
+        steps.push((r.stress[1], r.report.limit_points, r.report.factorizations));
+    }
+    steps
+}
+
 /// The paper RVE pulled along y to 2.6e-4 in `increments` increments, without the fast
-/// path: per increment, the stress along y, the certified limit points and the
-/// factorizations.
+/// path (see [`follow`]).
 fn pull_along_y(increments: u32) -> Vec<(f64, u32, u32)> {
     let text = common::paper_scene_with(&[
         ("to = [2.2e-4, 0.0, 0.0]", "to = [0.0, 2.6e-4, 0.0]"),
@@ -30,17 +45,7 @@ fn pull_along_y(increments: u32) -> Vec<(f64, u32, u32)> {
     let mut scene = Scene::from_toml_str(&text, ".").unwrap_or_else(|e| panic!("{e}\n{text}"));
     scene.spec.solver.fast_path = false;
     let model = Arc::new(Model::from_scene(&scene).unwrap());
-    let mut ws = model.workspace();
-    let mut inst = Instance::new(model.clone());
-    let mut steps = Vec::new();
-    for eps in rve::scene::path_points(&scene.spec.path) {
-        let r = inst
-            .update(eps, &mut ws, TangentRequest::Consistent)
-            .unwrap_or_else(|e| panic!("increment {}: {e}", steps.len() + 1));
-        inst.commit().unwrap();
-        steps.push((r.stress[1], r.report.limit_points, r.report.factorizations));
-    }
-    steps
+    follow(model, rve::scene::path_points(&scene.spec.path))
 }
 
 /// The first increment after the stress peak whose stress falls below 0.8 of the peak:
@@ -103,20 +108,15 @@ fn a_long_arc_crosses_a_corner_the_reversal_cannot_round() {
 fn a_reversal_onto_a_nearly_elastic_branch_is_refused() {
     let case = common::hard_paths::case(118);
     let scene = Scene::from_toml_str(&case.scene, common::repo("scenes")).unwrap();
-    let model = Arc::new(Model::from_scene(&scene).unwrap());
-    let mut ws = model.workspace();
-    let mut inst = Instance::new(model.clone());
-    let mut worst = (0, 0, 0);
-    for (k, &eps) in case.targets.iter().enumerate() {
-        let r = inst
-            .update(eps, &mut ws, TangentRequest::Consistent)
-            .unwrap_or_else(|e| panic!("increment {}: {e}", k + 1));
-        inst.commit().unwrap();
-        if r.report.factorizations > worst.1 {
-            worst = (k + 1, r.report.factorizations, r.report.limit_points);
-        }
-    }
-    let (increment, factorizations, limit_points) = worst;
+    let steps = follow(
+        Arc::new(Model::from_scene(&scene).unwrap()),
+        case.targets.iter().copied(),
+    );
+    // The first increment with the most factorizations.
+    let worst = (0..steps.len())
+        .max_by_key(|&k| (steps[k].2, std::cmp::Reverse(k)))
+        .unwrap();
+    let (increment, factorizations, limit_points) = (worst + 1, steps[worst].2, steps[worst].1);
     println!(
         "worst increment {increment}: {factorizations} factorizations, {limit_points} limit points"
     );
