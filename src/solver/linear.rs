@@ -126,6 +126,19 @@ impl SymmetricAnalysis {
             }
         }
     }
+
+    /// Solves `A x = b` in place for the `ncols` columns of `rhs` with the LDL^T factor
+    /// values `l` of this analysis, in the plain loops of `supernodal_solve`.
+    fn solve_ldlt(&self, l: &[f64], rhs: &mut [f64], ncols: usize, scratch: &mut [f64]) {
+        supernodal_solve::solve_ldlt(
+            self.supernodal(),
+            self.symbolic.perm(),
+            l,
+            rhs,
+            ncols,
+            scratch,
+        );
+    }
 }
 
 /// The lower triangle of `P A P^T` for the fill-reducing permutation `P` of the symmetric
@@ -339,16 +352,7 @@ impl LinearSolver {
                     a,
                     &mut numeric.probe,
                     &mut numeric.probe_image,
-                    |rhs, _| {
-                        supernodal_solve::solve_ldlt(
-                            c.supernodal(),
-                            c.symbolic.perm(),
-                            l,
-                            rhs,
-                            1,
-                            scratch,
-                        )
-                    },
+                    |rhs, _| c.solve_ldlt(l, rhs, 1, scratch),
                     stack,
                 );
                 accurate.then_some(FactorKind::LdltIndefinite)
@@ -418,7 +422,7 @@ impl LinearSolver {
             // One column: plain loops (`supernodal_solve`); faer's kernels pay off from
             // three columns on (measured in docs/solver.md).
             let (l, scratch) = (&numeric.l_values, &mut numeric.solve_scratch);
-            supernodal_solve::solve_ldlt(c.supernodal(), c.symbolic.perm(), l, rhs, 1, scratch);
+            c.solve_ldlt(l, rhs, 1, scratch);
             return;
         }
         let b = MatMut::from_column_major_slice_mut(rhs, n, ncols);
@@ -733,9 +737,7 @@ mod tests {
                     .collect();
                 let c = f.linear.symmetric.as_ref().unwrap();
                 let mut ours = rhs.clone();
-                supernodal_solve::solve_ldlt(
-                    c.supernodal(),
-                    c.symbolic.perm(),
+                c.solve_ldlt(
                     &f.numeric.l_values,
                     &mut ours,
                     width,
