@@ -339,6 +339,45 @@ impl Discretization {
     }
 }
 
+impl Discretization {
+    /// The stiffness values `K = K_const + K_itz` on the pattern with every interface
+    /// point on a fixed linear branch: `frozen_law` answers `t = S delta` with the
+    /// per-point history `frozen` and contact status `closed` (one entry per point,
+    /// element-major); see [`crate::interface::Implex`]. No interface: `K_const`.
+    /// Allocates nothing.
+    pub fn frozen_stiffness(
+        &self,
+        frozen_law: &dyn InterfaceLaw,
+        frozen: &[f64],
+        closed: &[bool],
+        k: &mut [f64],
+    ) {
+        k.copy_from_slice(&self.k_const);
+        let per_element = self.history_per_interface();
+        let np = self.points_per_interface();
+        let mut scratch = [0.0; 64];
+        let trial = &mut scratch[..per_element];
+        let zero = SVector::<f64, 8>::zeros();
+        for (e, geometry) in self.interfaces.iter().enumerate() {
+            let resp = interface4::evaluate_with(
+                geometry,
+                self.quadrature,
+                frozen_law,
+                &frozen[e * per_element..(e + 1) * per_element],
+                &zero,
+                trial,
+                TangentKind::Consistent,
+                Some(&closed[e * np..(e + 1) * np]),
+            );
+            scatter(
+                k,
+                &self.pattern.interface_slots[e],
+                resp.stiffness.transpose().as_slice(),
+            );
+        }
+    }
+}
+
 /// Adds a row-major element matrix into the pattern values.
 fn scatter(values: &mut [f64], slots: &[u32], entries: &[f64]) {
     for (&s, &v) in slots.iter().zip(entries) {

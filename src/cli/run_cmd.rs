@@ -133,9 +133,17 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .unwrap_or_else(|_| ProgressStyle::default_bar());
         ProgressBar::new(n_steps as u64).with_style(style)
     });
+    let mut previous = [0.0; 3];
     for (step, eps) in points.into_iter().enumerate() {
         let t0 = Instant::now();
-        let r = instance.update(eps, &mut ws, TangentRequest::Consistent)?;
+        // The time increment of a path step: the norm of its strain increment (used by
+        // IMPL-EX only, see `solver::implex`).
+        let dt = (0..3)
+            .map(|c| (eps[c] - previous[c]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        previous = eps;
+        let r = instance.update_timed(eps, dt, &mut ws, TangentRequest::Consistent)?;
         let seconds = t0.elapsed().as_secs_f64();
         instance.commit()?;
         let d = r.tangent;

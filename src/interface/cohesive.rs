@@ -464,6 +464,33 @@ impl InterfaceLaw for CohesiveLaw {
         }
     }
 
+    /// IMPL-EX's frozen branch: open, the unloading secant of eq. 24 at `delta_max`,
+    /// `k(delta_max) diag(beta^2, 1)` (for a virgin point the initial stiffness); closed,
+    /// the contact branch (eq. 47: `k_p I`; with [`ContactShear::Cohesive`] the sliding's
+    /// secant and the normal penalty). Contact off: always the open secant.
+    fn frozen_secant(&self, history: &[f64], closed: bool, length: f64) -> Option<Matrix2<f64>> {
+        let k = self.unloading_secant(&CohesiveHistory {
+            delta_max: history[0],
+        });
+        let shear = k * self.beta * self.beta;
+        Some(match (self.contact && closed, self.contact_shear) {
+            (false, _) => Matrix2::new(shear, 0.0, 0.0, k),
+            (true, ContactShear::Penalty) => {
+                Matrix2::from_diagonal_element(self.contact_stiffness(length))
+            }
+            (true, ContactShear::Cohesive) => {
+                Matrix2::new(shear, 0.0, 0.0, self.contact_stiffness(length))
+            }
+        })
+    }
+
+    /// `delta_max` extrapolated; it never decreases (`h_n >= h_{n-1}` and `ratio >= 0`).
+    fn extrapolate(&self, committed: &[f64], previous: &[f64], ratio: f64, out: &mut [f64]) {
+        for ((o, &h), &p) in out.iter_mut().zip(committed).zip(previous) {
+            *o = h + ratio.max(0.0) * (h - p).max(0.0);
+        }
+    }
+
     /// `delta_max` is a non-negative opening.
     fn history_is_valid(&self, history: &[f64]) -> bool {
         history.iter().all(|d| d.is_finite() && *d >= 0.0)

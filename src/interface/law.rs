@@ -124,6 +124,24 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         false
     }
 
+    /// The matrix `S` of the law's linear branch through the origin at `history` with the
+    /// contact status `closed` (`t = S delta`): what IMPL-EX integration holds fixed
+    /// within a step ([`crate::interface::Implex`]). Symmetric positive definite. `None`:
+    /// the law has no such branch and cannot be integrated by IMPL-EX (the default).
+    fn frozen_secant(&self, _history: &[f64], _closed: bool, _length: f64) -> Option<Matrix2<f64>> {
+        None
+    }
+
+    /// The history after a step, extrapolated from the last two converged ones
+    /// (`previous`, then `committed`) for a step `ratio` times as long as the last
+    /// (Oliver, Huespe & Cante 2008): `h_ex = h_n + ratio (h_n - h_{n-1})`. Written into
+    /// `out`. The default extrapolates every value linearly.
+    fn extrapolate(&self, committed: &[f64], previous: &[f64], ratio: f64, out: &mut [f64]) {
+        for ((o, &h), &p) in out.iter_mut().zip(committed).zip(previous) {
+            *o = h + ratio * (h - p);
+        }
+    }
+
     /// Whether a history read from a checkpoint is admissible for this law.
     fn history_is_valid(&self, history: &[f64]) -> bool {
         history.iter().all(|v| v.is_finite())

@@ -38,6 +38,11 @@ impl InterfaceLaw for LinearInterface {
         }
     }
 
+    /// The law itself: it is linear.
+    fn frozen_secant(&self, _history: &[f64], _closed: bool, _length: f64) -> Option<Matrix2<f64>> {
+        Some(Matrix2::new(self.shear, 0.0, 0.0, self.normal))
+    }
+
     /// Always: the law is linear and has no history.
     fn stays_linear(
         &self,

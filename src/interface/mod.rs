@@ -2,9 +2,11 @@
 //! trait: the paper's cohesive-contact law and a linear elastic interface.
 
 mod cohesive;
+mod implex;
 mod law;
 mod linear;
 
 pub use cohesive::{CohesiveHistory, CohesiveLaw, CohesivePoint, ContactShear, Penalty};
+pub use implex::Implex;
 pub use law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
 pub use linear::LinearInterface;

@@ -6,8 +6,10 @@ use std::sync::Arc;
 
 use crate::constraint::BoundaryCondition;
 use crate::interface::{CohesiveLaw, InterfaceLaw, LinearInterface, Penalty};
-use crate::scene::{BoundaryKind, ContactStatusSpec, ItzSpec, SceneSpec, SolverSpec};
-use crate::solver::{ContactStatus, Settings};
+use crate::scene::{
+    BoundaryKind, ContactStatusSpec, IntegrationSpec, ItzSpec, SceneSpec, SolverSpec,
+};
+use crate::solver::{ContactStatus, Integration, Settings};
 
 /// The solver settings of `[solver]`.
 pub fn solver_settings(spec: &SolverSpec) -> Settings {
@@ -25,6 +27,10 @@ pub fn solver_settings(spec: &SolverSpec) -> Settings {
             ContactStatusSpec::PerIteration => ContactStatus::PerIteration,
         },
         fast_path: spec.fast_path,
+        integration: match spec.integration {
+            IntegrationSpec::Implicit => Integration::Implicit,
+            IntegrationSpec::Implex => Integration::Implex,
+        },
     }
 }
 

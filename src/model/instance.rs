@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use super::rve_model::{Model, Response};
 use crate::error::{Error, Result};
-use crate::solver::{Answer, TangentRequest, Workspace};
+use crate::solver::{Answer, Integration, TangentRequest, Workspace};
 use crate::state::persist::{self, StateSizes};
 use crate::state::State;
 
@@ -41,6 +41,9 @@ pub struct Instance {
     last: Option<LastTrial>,
     /// Updates answered without a solve (fast path and repeats) since creation.
     fast_updates: u64,
+    /// With IMPL-EX integration: the step ratio (bits) whose step of the committed state
+    /// `trial.linear` holds, if any (see [`Model::implex_update`]).
+    implex_step: Option<u64>,
 }
 
 /// The trial awaiting [`Instance::commit`].
@@ -57,6 +60,7 @@ enum Pending {
 #[derive(Clone, Copy, Debug)]
 struct LastTrial {
     strain: [f64; 3],
+    dt: f64,
     request: TangentRequest,
     response: Response,
 }
@@ -72,6 +76,7 @@ impl Instance {
             pending: Pending::Nothing,
             last: None,
             fast_updates: 0,
+            implex_step: None,
         }
     }
 
@@ -97,21 +102,57 @@ impl Instance {
 
     /// Trial update at `strain` from the committed state: a repeat of the pending trial,
     /// the fast path, or a solve ([`Model::update`]). On failure the trial is discarded
-    /// and the committed state is unchanged.
+    /// and the committed state is unchanged. No time increment: see
+    /// [`update_timed`](Self::update_timed).
     pub fn update(
         &mut self,
         strain: [f64; 3],
         ws: &mut Workspace,
         request: TangentRequest,
     ) -> Result<Response> {
-        if let Some(response) = self.repeated(strain, request) {
+        self.update_timed(strain, 0.0, ws, request)
+    }
+
+    /// [`update`](Self::update) over a host time increment `dt` (`DTIME`; 0 or negative:
+    /// none given). Implicit integration ignores it; IMPL-EX scales its extrapolation by
+    /// the ratio of this step's `dt` to the last committed one's (see
+    /// [`crate::solver::implex`]).
+    pub fn update_timed(
+        &mut self,
+        strain: [f64; 3],
+        dt: f64,
+        ws: &mut Workspace,
+        request: TangentRequest,
+    ) -> Result<Response> {
+        if let Some(response) = self.repeated(strain, dt, request) {
             self.fast_updates += 1;
             return Ok(response);
         }
         self.pending = Pending::Nothing;
         self.last = None;
+        let response = if self.model.solver.integration == Integration::Implex {
+            self.implex(strain, dt, ws, request)?
+        } else {
+            self.implicit(strain, ws, request)?
+        };
+        self.last = Some(LastTrial {
+            strain,
+            dt,
+            request,
+            response,
+        });
+        Ok(response)
+    }
+
+    /// The implicit update: the fast path or a solve.
+    fn implicit(
+        &mut self,
+        strain: [f64; 3],
+        ws: &mut Workspace,
+        request: TangentRequest,
+    ) -> Result<Response> {
         let model = &self.model;
-        let response = match model.fast_update(&self.committed, strain, request)? {
+        Ok(match model.fast_update(&self.committed, strain, request)? {
             Some(response) => {
                 self.fast_updates += 1;
                 self.pending = Pending::Fast(strain);
@@ -123,12 +164,33 @@ impl Instance {
                 self.pending = Pending::Solved;
                 response
             }
-        };
-        self.last = Some(LastTrial {
-            strain,
-            request,
-            response,
-        });
+        })
+    }
+
+    /// The IMPL-EX update: the step kept from an earlier update of this step (same
+    /// committed state, same step ratio; only with `solver.fast_path`), or a new step.
+    fn implex(
+        &mut self,
+        strain: [f64; 3],
+        dt: f64,
+        ws: &mut Workspace,
+        request: TangentRequest,
+    ) -> Result<Response> {
+        let model = &self.model;
+        let ratio = crate::solver::implex::step_ratio(self.committed.implex.step, dt).to_bits();
+        let reuse = model.solver.fast_path && self.implex_step == Some(ratio);
+        let trial = self.trial.get_or_insert_with(|| model.new_state());
+        self.implex_step = None;
+        let mut response = model.implex_update(&self.committed, strain, dt, ws, trial, reuse)?;
+        self.implex_step = Some(ratio);
+        if reuse {
+            self.fast_updates += 1;
+        }
+        if request == TangentRequest::None {
+            response.tangent = [0.0; 9];
+            response.s_zz_tangent = [0.0; 3];
+        }
+        self.pending = Pending::Solved;
         Ok(response)
     }
 
@@ -136,9 +198,10 @@ impl Instance {
     /// bit for bit. (Only the same request: a trial with the tangent also stored the
     /// predictor's sensitivity and the fast path's data, which one without does not, and
     /// the trial a commit accepts must be the one the last call would have computed.)
-    fn repeated(&self, strain: [f64; 3], request: TangentRequest) -> Option<Response> {
+    fn repeated(&self, strain: [f64; 3], dt: f64, request: TangentRequest) -> Option<Response> {
         let last = self.last.as_ref().filter(|_| self.has_trial())?;
-        let same = last.strain.map(f64::to_bits) == strain.map(f64::to_bits);
+        let same = last.strain.map(f64::to_bits) == strain.map(f64::to_bits)
+            && last.dt.to_bits() == dt.to_bits();
         if !(same && last.request == request) {
             return None;
         }
@@ -151,7 +214,10 @@ impl Instance {
     /// there is none (no successful update since the last commit, revert, reset or load).
     pub fn commit(&mut self) -> Result<()> {
         match (self.pending, &mut self.trial) {
-            (Pending::Solved, Some(trial)) => std::mem::swap(&mut self.committed, trial),
+            (Pending::Solved, Some(trial)) => {
+                std::mem::swap(&mut self.committed, trial);
+                self.implex_step = None;
+            }
             (Pending::Fast(strain), _) => {
                 // The state at the new strain: same history, unknowns lazy (see
                 // `LinearBranch`), no path curvature (a full update on linear branches
@@ -178,6 +244,7 @@ impl Instance {
     pub fn reset(&mut self) {
         self.committed = self.model.new_state();
         self.trial = None;
+        self.implex_step = None;
         self.revert();
     }
 
@@ -240,7 +307,16 @@ impl Instance {
                 ),
             });
         }
+        if !state
+            .implex
+            .is_consistent(state.history.len(), self.model.disc.interface_points())
+        {
+            return Err(Error::BadState {
+                reason: "IMPL-EX history of another size than the model's, or not finite".into(),
+            });
+        }
         self.committed = state;
+        self.implex_step = None;
         self.revert();
         Ok(())
     }

@@ -13,8 +13,8 @@ use crate::homogenization::Homogenizer;
 use crate::mesh::{Mesh, Microstructure};
 use crate::scene::{Scene, MAX_STRAIN};
 use crate::solver::{
-    fast_path, solve_increment, Answer, IncrementReport, LinearSolver, Problem, Settings,
-    TangentRequest, Workspace,
+    fast_path, implex, solve_increment, Answer, IncrementReport, Integration, LinearSolver,
+    Problem, Settings, TangentRequest, Workspace,
 };
 use crate::state::State;
 
@@ -200,6 +200,59 @@ impl Model {
         })
     }
 
+    /// An IMPL-EX update at `strain` from `committed` for a host time increment `dt` (0:
+    /// none, see [`crate::solver::implex`]). With `reuse`, `trial.linear` already holds the
+    /// step of this `committed` state and this `dt` ratio, and the answer costs no
+    /// factorization; otherwise the step is assembled and factorized once and kept there.
+    /// Never modifies `committed`. The tangent is the step's `D_ex`, symmetric positive
+    /// definite; it is returned whatever `request` (it costs nothing more).
+    pub fn implex_update(
+        &self,
+        committed: &State,
+        strain: [f64; 3],
+        dt: f64,
+        ws: &mut Workspace,
+        trial: &mut State,
+        reuse: bool,
+    ) -> Result<Response> {
+        if ws.model_id() != self.id {
+            return Err(Error::WorkspaceMismatch);
+        }
+        check_strain(strain)?;
+        let problem = self.problem();
+        let mut factorizations = 0;
+        if !reuse {
+            let ratio = implex::step_ratio(committed.implex.step, dt);
+            let condensed = implex::factorize_step(&problem, committed, ratio, ws)?;
+            let tangent = self.hom.tangent_from_condensed(&condensed);
+            let szz = self.hom.szz_tangent(ws.factorization().kg());
+            if !tangent.iter().chain(&szz).all(|v| v.is_finite()) {
+                return Err(Error::Solve {
+                    reason: "the IMPL-EX step's homogenized tangent is not finite: the \
+                             scene's material constants are out of floating-point range"
+                        .into(),
+                    depth: 0,
+                    suggested_step_ratio: 0.5,
+                });
+            }
+            implex::store_step(&problem, trial, &strain, tangent, szz, ws);
+            factorizations = 1;
+        }
+        let mut report = implex::finish_step(&problem, committed, &strain, dt, trial);
+        report.factorizations = factorizations;
+        if reuse {
+            report.answer = Answer::FastPath;
+        }
+        let (stress, s_zz) = fast_path::response(&trial.linear, &strain);
+        Ok(Response {
+            stress,
+            tangent: trial.linear.tangent,
+            s_zz,
+            s_zz_tangent: trial.linear.szz,
+            report,
+        })
+    }
+
     /// The fast path's answer at `strain` from `committed` (see [`crate::solver::fast_path`]):
     /// `Some` when every interface point provably stays on the linear branch of the
     /// committed state's branch set, `None` when the update needs a solve. Exact to
@@ -242,6 +295,18 @@ impl Model {
     pub fn current_state<'s>(&self, state: &'s State) -> Result<Cow<'s, State>> {
         if state.unknowns_are_current() {
             return Ok(Cow::Borrowed(state));
+        }
+        if self.solver.integration == Integration::Implex {
+            // The fluctuation of an IMPL-EX state is `X_ex eps` with the step's frozen
+            // branches, which the committed state no longer holds.
+            return Err(Error::Solve {
+                reason: "the fluctuation of this IMPL-EX state was formed at an earlier \
+                         iteration of its step and cannot be formed again; write outputs \
+                         after an update that factorized its step"
+                    .into(),
+                depth: 0,
+                suggested_step_ratio: 1.0,
+            });
         }
         let mut ws = self.workspace();
         let mut out = self.new_state();

@@ -13,7 +13,8 @@ pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
 pub use path::{path_points, MAX_STRAIN};
 pub use schema::{
     BoundaryKind, BoundarySpec, CellSpec, ContactStatusSpec, EffectsSpec, ElasticSpec,
-    GeometrySpec, GmshSpec, InterfaceQuadratureSpec, ItzSpec, LinearItzSpec, MaterialsSpec,
-    MeshSpec, PathSegment, PenaltySpec, SceneSpec, SolverSpec, StraightInterfaceSpec,
+    GeometrySpec, GmshSpec, IntegrationSpec, InterfaceQuadratureSpec, ItzSpec, LinearItzSpec,
+    MaterialsSpec, MeshSpec, PathSegment, PenaltySpec, SceneSpec, SolverSpec,
+    StraightInterfaceSpec,
 };
 pub use validate::{MAX_PATH_INCREMENTS, MAX_TRIANGLES};

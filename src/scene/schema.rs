@@ -289,6 +289,25 @@ pub struct SolverSpec {
     /// exact (see `solver::fast_path`); `false` solves every update.
     #[serde(default = "yes")]
     pub fast_path: bool,
+    /// How the ITZ history is integrated over a host increment: `"implicit"` (default)
+    /// or `"implex"`, see [`IntegrationSpec`] and `docs/implex.md`.
+    #[serde(default)]
+    pub integration: IntegrationSpec,
+}
+
+/// `solver.integration`: how the ITZ law's history is integrated over a step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegrationSpec {
+    /// Backward Euler: the history of the step's end, found by Newton with path
+    /// following through the RVE's snap-backs.
+    #[default]
+    Implicit,
+    /// IMPL-EX (Oliver, Huespe & Cante 2008): the history extrapolated from the last two
+    /// converged steps, the contact status of the last one. The RVE is linear within a
+    /// step: one factorization per step, a symmetric positive definite tangent, no
+    /// snap-back; the stress lags the implicit law by an error of first order in the step.
+    Implex,
 }
 
 /// `solver.contact_status`: when the solver reads the contact status of the ITZ points
@@ -320,6 +339,7 @@ impl Default for SolverSpec {
             second_order_predictor: true,
             contact_status: ContactStatusSpec::ActiveSet,
             fast_path: true,
+            integration: IntegrationSpec::Implicit,
         }
     }
 }

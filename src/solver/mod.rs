@@ -14,6 +14,7 @@
 mod arclength;
 mod contact;
 pub mod fast_path;
+pub mod implex;
 mod increment;
 mod linear;
 mod newton;
@@ -27,5 +28,5 @@ mod workspace;
 pub use increment::{solve_increment, Solved};
 pub use linear::{FactorKind, LinearSolver, NumericFactor};
 pub use problem::{Problem, Strain};
-pub use settings::{Answer, ContactStatus, IncrementReport, Settings, TangentRequest};
+pub use settings::{Answer, ContactStatus, IncrementReport, Integration, Settings, TangentRequest};
 pub use workspace::{Factorization, Workspace};

@@ -26,6 +26,18 @@ pub struct Settings {
     /// Answer updates that keep every interface point on its linear branch without
     /// Newton (see `fast_path`).
     pub fast_path: bool,
+    /// How the interface history is integrated over a step (see `implex`).
+    pub integration: Integration,
+}
+
+/// How the interface history is integrated over a host increment.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Integration {
+    /// Backward Euler, solved by Newton and path following.
+    #[default]
+    Implicit,
+    /// IMPL-EX: the extrapolated history, linear within a step (see `implex`).
+    Implex,
 }
 
 /// When the solver reads the contact status of the interface points from their gaps

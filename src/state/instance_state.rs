@@ -31,6 +31,55 @@ pub struct State {
     /// update starts from the status this state is in equilibrium with: the gaps' status
     /// with these points flipped. All zero when every point agrees with its gap.
     pub held_contact: Vec<u64>,
+    /// What IMPL-EX integration keeps besides `history` (see [`ImplexHistory`]); empty
+    /// with implicit integration.
+    pub implex: ImplexHistory,
+}
+
+/// The part of a converged state that IMPL-EX integration (`solver::implex`) needs for the
+/// next extrapolation, `h_ex = h_n + (dt_{n+1}/dt_n) (h_n - h_{n-1})`, and the contact
+/// status it holds for the step. Empty buffers stand for "as `history`" and "all open":
+/// the virgin state and every implicit state.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ImplexHistory {
+    /// `h_{n-1}`: the interface history one converged step before [`State::history`].
+    pub previous: Vec<f64>,
+    /// `dt_n`: the time increment of the step that led to this state; 0 when the host
+    /// gave none.
+    pub step: f64,
+    /// The contact status of every interface point at this state (closed), one bit per
+    /// point as in [`State::held_contact`].
+    pub closed: Vec<u64>,
+}
+
+impl ImplexHistory {
+    /// Whether point `point` is closed.
+    pub fn is_closed(&self, point: usize) -> bool {
+        self.closed
+            .get(point / 64)
+            .is_some_and(|w| w >> (point % 64) & 1 == 1)
+    }
+
+    fn copy_from(&mut self, other: &ImplexHistory) {
+        self.previous.clone_from(&other.previous);
+        self.step = other.step;
+        self.closed.clone_from(&other.closed);
+    }
+
+    /// Whether the buffers fit `n_history` history values and `points` points (or are
+    /// empty) with finite, admissible values: what a decoder checks.
+    pub fn is_consistent(&self, n_history: usize, points: usize) -> bool {
+        (self.previous.is_empty() || self.previous.len() == n_history)
+            && (self.closed.is_empty() || self.closed.len() == held_contact_words(points))
+            && self.step.is_finite()
+            && self.step >= 0.0
+            && self.previous.iter().all(|v| v.is_finite())
+    }
+
+    fn bytes(&self) -> usize {
+        self.previous.capacity() * std::mem::size_of::<f64>()
+            + self.closed.capacity() * std::mem::size_of::<u64>()
+    }
 }
 
 /// Words of a [`State::held_contact`] bitset for `n_history` history values.
@@ -208,6 +257,7 @@ impl State {
             curvature: PathCurvature::empty(),
             linear: LinearBranch::default(),
             held_contact: vec![0; held_contact_words(n_history)],
+            implex: ImplexHistory::default(),
         }
     }
 
@@ -236,6 +286,7 @@ impl State {
         self.curvature.step = other.curvature.step;
         self.curvature.data.copy_from(&other.curvature.data);
         self.held_contact.copy_from_slice(&other.held_contact);
+        self.implex.copy_from(&other.implex);
         self.linear.invalidate();
     }
 
@@ -268,6 +319,7 @@ impl State {
             + self.curvature.data.bytes()
             + self.linear.bytes()
             + self.held_contact.capacity() * std::mem::size_of::<u64>()
+            + self.implex.bytes()
     }
 }
 

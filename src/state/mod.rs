@@ -6,7 +6,8 @@ mod linear_branch;
 pub mod persist;
 
 pub use instance_state::{
-    held_contact_words, PathCurvature, Quantized, Sensitivity, State, SENSITIVITY_BLOCK,
+    held_contact_words, ImplexHistory, PathCurvature, Quantized, Sensitivity, State,
+    SENSITIVITY_BLOCK,
 };
 pub use linear_branch::{LinearBranch, JUMP_OPERATOR_LEN};
 pub use persist::{StateSizes, STATE_FORMAT_VERSION};

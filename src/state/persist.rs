@@ -32,7 +32,8 @@
 //! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`PathCurvature`](super::PathCurvature)) (read, kept) |
 //! | 6 | 0.2.0 | format 5 plus the trailing CRC-32C (read, kept; no fast-path data: the next update solves) |
 //! | 7 | main after 0.2.0 | format 6 plus the fast path's [`LinearBranch`](super::LinearBranch) (read, kept; no point held against its gap) |
-//! | 8 | main after 0.2.0 | format 7 plus the points held at a contact status their gap contradicts, a bitset ([`State::held_contact`]) (written) |
+//! | 8 | main after 0.2.0 | format 7 plus the points held at a contact status their gap contradicts, a bitset ([`State::held_contact`]) (read, kept; no IMPL-EX history) |
+//! | 9 | 0.3.0 | format 8 plus IMPL-EX's previous history, step and contact status ([`ImplexHistory`](super::ImplexHistory)), empty with implicit integration (written) |
 //!
 //! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
 //! model, so this module depends on the state alone; `model::Instance::save_state` and
@@ -46,13 +47,13 @@ use crate::error::{Error, Result};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format written; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 8;
+pub const STATE_FORMAT_VERSION: u32 = 9;
 /// Older formats this library still reads without a checksum.
 pub const READABLE_OLD_FORMATS: [u32; 5] = [1, 2, 3, 4, 5];
 /// Older formats this library still reads, with the trailing checksum.
-pub const READABLE_CHECKED_FORMATS: [u32; 2] = [6, 7];
+pub const READABLE_CHECKED_FORMATS: [u32; 3] = [6, 7, 8];
 /// Every older format this library reads.
-const READABLE_FORMATS: [u32; 7] = [1, 2, 3, 4, 5, 6, 7];
+const READABLE_FORMATS: [u32; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
 const HEADER: usize = 40;
 /// Bytes of the trailing CRC-32C.
 const CHECKSUM: usize = 4;
@@ -211,6 +212,7 @@ fn payload(version: u32, payload: &[u8]) -> Result<State> {
         // Formats 5 and 6 have the same payload.
         5 | 6 => read::<Format6>(payload)?.into(),
         7 => read::<Format7>(payload)?.into(),
+        8 => read::<Format8>(payload)?.into(),
         _ => read::<State>(payload)?,
     })
 }
@@ -342,6 +344,22 @@ impl From<Format7> for State {
     }
 }
 
+/// Format 8: format 7 plus the held contact status, without IMPL-EX history (read as
+/// empty: a state written by implicit integration).
+#[derive(Deserialize)]
+struct Format8 {
+    format7: Format7,
+    held_contact: Vec<u64>,
+}
+
+impl From<Format8> for State {
+    fn from(old: Format8) -> Self {
+        let mut state = State::from(old.format7);
+        state.held_contact = old.held_contact;
+        state
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -419,18 +437,49 @@ mod tests {
         let decoded = decode(&bytes, SIZES).unwrap();
         assert_eq!(decoded, s);
         assert!(decoded.is_held(0) && !decoded.is_held(1) && decoded.is_held(2));
-        // Format 7: the same payload less the bitset (its u64 length and one word).
+        // Format 7: the same payload less the bitset (its u64 length and one word) and
+        // the empty IMPL-EX history.
         let held = 8 + 8 * s.held_contact.len();
-        let mut old = bytes[..bytes.len() - CHECKSUM - held].to_vec();
-        old[8..12].copy_from_slice(&7u32.to_le_bytes());
-        let payload = (old.len() - HEADER) as u64;
-        old[32..40].copy_from_slice(&payload.to_le_bytes());
-        let sum = crc32c::crc32c(&old);
-        old.extend_from_slice(&sum.to_le_bytes());
+        let old = older_format(&bytes, 7, held + EMPTY_IMPLEX);
         let loaded = decode(&old, SIZES).unwrap();
         assert!(loaded.held_contact.iter().all(|&w| w == 0));
         s.held_contact.fill(0);
         assert_eq!(loaded, s, "the same state, no point held");
+    }
+
+    /// Bytes of an empty [`ImplexHistory`](crate::state::ImplexHistory): two empty
+    /// vectors' lengths and the step.
+    const EMPTY_IMPLEX: usize = 24;
+
+    /// `bytes` (current format) rewritten as format `version` by dropping the payload's
+    /// last `strip` bytes, with a new header and checksum.
+    fn older_format(bytes: &[u8], version: u32, strip: usize) -> Vec<u8> {
+        let mut old = bytes[..bytes.len() - CHECKSUM - strip].to_vec();
+        old[8..12].copy_from_slice(&version.to_le_bytes());
+        let payload = (old.len() - HEADER) as u64;
+        old[32..40].copy_from_slice(&payload.to_le_bytes());
+        let sum = crc32c::crc32c(&old);
+        old.extend_from_slice(&sum.to_le_bytes());
+        old
+    }
+
+    /// A state with IMPL-EX history round-trips; format 8 (none) loads with it empty and
+    /// every other field kept.
+    #[test]
+    fn format_8_loads_without_implex_history() {
+        let mut s = state();
+        s.held_contact[0] = 0b10;
+        let plain = encode(&s, SIZES).unwrap();
+        let loaded = decode(&older_format(&plain, 8, EMPTY_IMPLEX), SIZES).unwrap();
+        assert_eq!(loaded, s);
+        s.implex.previous = vec![1e-5; SIZES.history];
+        s.implex.step = 0.25;
+        s.implex.closed = vec![0b1001];
+        let bytes = encode(&s, SIZES).unwrap();
+        let decoded = decode(&bytes, SIZES).unwrap();
+        assert_eq!(decoded, s);
+        assert!(decoded.implex.is_closed(0) && !decoded.implex.is_closed(1));
+        assert!(decoded.implex.is_consistent(SIZES.history, SIZES.history));
     }
 
     /// Fast-path data round-trips, and data of inconsistent sizes is refused.

@@ -1,0 +1,193 @@
+//! IMPL-EX integration of the interface history over a host step (Oliver, Huespe & Cante
+//! 2008; the law side is [`crate::interface::Implex`]).
+//!
+//! # The step
+//! With the history extrapolated from the last two converged states,
+//! ```text
+//! h_ex = h_n + r (h_n - h_{n-1}),     r = dt_{n+1} / dt_n       ([`step_ratio`])
+//! ```
+//! and the contact status of the last converged state held, every interface point is on
+//! a linear branch through the origin, so the discrete equilibrium (eq. 14) is linear in
+//! the macro strain, `K_ex x + G eps = 0`:
+//! ```text
+//! x = X eps,   X = -K_ex^-1 G,   sigma = D_ex eps,   D_ex = D_Taylor - G^T K_ex^-1 G / V   (eq. 18)
+//! ```
+//! `K_ex` is symmetric positive definite (the bulk is, every frozen secant is), so is
+//! `D_ex`: a host's Newton loop on such a material converges in one or two iterations,
+//! whatever the RVE does. [`factorize_step`] assembles and factorizes `K_ex` once per
+//! step and keeps, as the fast path does (`fast_path`, [`LinearBranch`]), `D_ex`, the
+//! `s_zz` row and every point's jump operator `A_q = J_q X`: the host's later iterations
+//! in the same step are answered from them without a factorization.
+//!
+//! # The implicit history
+//! At every answer, [`finish_step`] forms the trial's *implicit* history from the jumps
+//! `A_q eps` by the law itself (eq. 25: `delta_max' = max(delta_max, delta)`, frozen while
+//! closed), and the contact status from their gaps. When the host commits, that is the
+//! state the next step extrapolates from. (Both the first answer of a step and the later
+//! ones use the same f32 operators `A_q`, so the history does not depend on whether a step
+//! was answered from its kept data: results are identical with the fast path on or off.)
+//!
+//! # The step size
+//! `dt` is the host's time increment (the UMAT's `DTIME`). A host that passes none (`dt
+//! <= 0`, as `rve_update` does) has each update count as one unit step (`r = 1`): it
+//! keeps the step within the update, so the RVE stays linear in the step and one
+//! factorization answers every iteration. (The norm of the macro strain increment would
+//! make `h_ex` depend on the trial strain, the RVE nonlinear within the step and its
+//! tangent non-symmetric.) `rve run` passes the norm of each path increment, which is
+//! known before the step.
+
+use super::problem::{Problem, Strain};
+use super::settings::IncrementReport;
+use super::workspace::Workspace;
+use crate::error::{Error, Result};
+use crate::interface::{Implex, TangentKind};
+use crate::state::{held_contact_words, LinearBranch, State, JUMP_OPERATOR_LEN};
+
+/// `dt_{n+1} / dt_n` when both time increments are given (positive and finite), else 1.
+pub fn step_ratio(previous: f64, dt: f64) -> f64 {
+    let given = |t: f64| t.is_finite() && t > 0.0;
+    if given(previous) && given(dt) {
+        dt / previous
+    } else {
+        1.0
+    }
+}
+
+/// The step's linear RVE from `committed` for a step `ratio` times the last: the
+/// extrapolated history (into the workspace) and the committed contact status held, `K_ex`
+/// assembled and factorized once, `X = K_ex^-1 G` solved. Returns the condensed term
+/// `G^T K_ex^-1 G` (eq. 18); `X` stays in the workspace's factorization for
+/// [`store_step`].
+pub fn factorize_step(
+    problem: &Problem,
+    committed: &State,
+    ratio: f64,
+    ws: &mut Workspace,
+) -> Result<[f64; 9]> {
+    let disc = problem.disc;
+    if let Some(law) = disc.law.as_deref() {
+        let previous = if committed.implex.previous.len() == committed.history.len() {
+            &committed.implex.previous
+        } else {
+            &committed.history
+        };
+        law.extrapolate(&committed.history, previous, ratio, &mut ws.history_start);
+        for (q, closed) in ws.contact.start.iter_mut().enumerate() {
+            *closed = committed.implex.is_closed(q);
+        }
+        let frozen = Implex { law };
+        disc.frozen_stiffness(
+            &frozen,
+            &ws.history_start,
+            &ws.contact.start,
+            &mut ws.current.k,
+        );
+    } else {
+        ws.current.k.copy_from_slice(&disc.k_const);
+    }
+    problem.factorize(ws, true).map_err(|e| Error::Solve {
+        reason: format!("singular RVE tangent on the IMPL-EX step's frozen branches ({e})"),
+        depth: 0,
+        suggested_step_ratio: 0.5,
+    })?;
+    let g = &disc.g;
+    ws.factorization.solve_g(problem.linear, g);
+    Ok(super::tangent::condensed(g, ws.factorization.kg(), None))
+}
+
+/// Keeps the step of [`factorize_step`] in `trial.linear`: `D_ex` (`tangent`), the `s_zz`
+/// row, every point's jump operator `A_q` and the held contact status; writes the
+/// fluctuation `X eps` at `strain` into `trial.unknowns`.
+pub fn store_step(
+    problem: &Problem,
+    trial: &mut State,
+    strain: &Strain,
+    tangent: [f64; 9],
+    szz: [f64; 3],
+    ws: &Workspace,
+) {
+    let (n, points) = (problem.n(), problem.disc.interface_points());
+    let linear: &mut LinearBranch = &mut trial.linear;
+    linear.jumps.resize(JUMP_OPERATOR_LEN * points, 0.0);
+    linear.closed.clear();
+    linear.closed.extend_from_slice(&ws.contact.start[..points]);
+    let kg = ws.factorization.kg();
+    for j in 0..3 {
+        let column = &kg[j * n..(j + 1) * n];
+        let jumps = &mut linear.jumps;
+        problem.disc.for_each_jump(column, |q, [s, nn]| {
+            jumps[JUMP_OPERATOR_LEN * q + j] = -s as f32;
+            jumps[JUMP_OPERATOR_LEN * q + 3 + j] = -nn as f32;
+        });
+    }
+    linear.tangent = tangent;
+    linear.szz = szz;
+    linear.unknowns_strain = *strain;
+    linear.valid = true;
+    for (i, x) in trial.unknowns.iter_mut().enumerate() {
+        *x = -(kg[i] * strain[0] + kg[n + i] * strain[1] + kg[2 * n + i] * strain[2]);
+    }
+}
+
+/// The trial at `strain` of the step kept in `trial.linear`, from `committed`: its strain,
+/// the implicit history and contact status from the jumps `A_q eps` (see the module docs),
+/// and what the next extrapolation needs (`h_n`, `dt`). Returns the branch counts. A
+/// trial whose unknowns were formed at another strain of the step keeps them there
+/// (`LinearBranch::unknowns_strain`).
+pub fn finish_step(
+    problem: &Problem,
+    committed: &State,
+    strain: &Strain,
+    dt: f64,
+    trial: &mut State,
+) -> IncrementReport {
+    trial.strain = *strain;
+    trial.sensitivity.valid = false;
+    trial.curvature.valid = false;
+    trial.held_contact.fill(0);
+    trial.history.copy_from_slice(&committed.history);
+    trial.implex.previous.clone_from(&committed.history);
+    trial.implex.step = if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
+    let mut report = IncrementReport {
+        factorizations: 0,
+        substeps: 1,
+        answer: super::Answer::Solved,
+        ..Default::default()
+    };
+    let Some(law) = problem.disc.law.as_deref() else {
+        trial.implex.closed.clear();
+        return report;
+    };
+    let (hl, np) = (law.history_len(), problem.disc.points_per_interface());
+    let points = problem.disc.interface_points();
+    trial.implex.closed.clear();
+    trial.implex.closed.resize(held_contact_words(points), 0);
+    let linear = &trial.linear;
+    for q in 0..points {
+        let a = &linear.jumps[JUMP_OPERATOR_LEN * q..JUMP_OPERATOR_LEN * (q + 1)];
+        let component = |c: &[f32]| {
+            f64::from(c[0]) * strain[0] + f64::from(c[1]) * strain[1] + f64::from(c[2]) * strain[2]
+        };
+        let jump = [component(&a[..3]), component(&a[3..])];
+        let closed = law.is_closed(jump);
+        let range = q * hl..(q + 1) * hl;
+        let length = problem.disc.interfaces[q / np].length;
+        law.respond_as(
+            &committed.history[range.clone()],
+            &mut trial.history[range.clone()],
+            jump,
+            length,
+            TangentKind::Consistent,
+            closed,
+        );
+        if closed {
+            trial.implex.closed[q / 64] |= 1 << (q % 64);
+            report.contact += 1;
+        } else if trial.history[range.clone()] != committed.history[range] {
+            report.loading += 1;
+        } else {
+            report.unloading += 1;
+        }
+    }
+    report
+}
