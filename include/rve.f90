@@ -121,7 +121,7 @@ module rve
 
   ! ---- bind(C) interfaces: one per function of include/rve.h, in the header's order ----
   public :: rve_update_batch, rve_last_error, rve_init, rve_init_file, rve_init_text, &
-      rve_clone_model, rve_update_ex, rve_update, rve_commit, rve_revert, rve_reset, &
+      rve_clone_model, rve_update_ex, rve_update_timed, rve_update, rve_commit, rve_revert, rve_reset, &
       rve_free, rve_fast_updates, rve_state_size, rve_state_save, rve_state_load, rve_write_vtk, rve_path_len, &
       rve_path_point, rve_model_builds, rve_status_message, rve_umat, rve_version, &
       rve_version_number, rve_abi_version
@@ -203,6 +203,22 @@ module rve
       type(rve_info), intent(inout) :: info
       integer(c_int32_t) :: status
     end function rve_update_ex
+
+    ! rve_update_ex over a host time increment dtime (the UMAT's DTIME; <= 0: none given).
+    ! Implicit integration ignores it; IMPL-EX scales its extrapolation by dtime / dtime_n.
+    ! tangent(3,3) is the TRANSPOSE (see above).
+    function rve_update_timed(h, strain, dtime, stress, tangent, tangent_request, info) &
+        bind(c, name="rve_update_timed") result(status)
+      import :: c_int64_t, c_double, c_int32_t, rve_info
+      integer(c_int64_t), value, intent(in) :: h
+      real(c_double), intent(in) :: strain(3)
+      real(c_double), value, intent(in) :: dtime
+      real(c_double), intent(inout) :: stress(3)
+      real(c_double), intent(inout) :: tangent(3, 3)
+      integer(c_int32_t), value, intent(in) :: tangent_request
+      type(rve_info), intent(inout) :: info
+      integer(c_int32_t) :: status
+    end function rve_update_timed
 
     ! rve_update_ex without info. tangent(3,3) is the TRANSPOSE (see above).
     function rve_update(h, strain, stress, tangent, tangent_request) &

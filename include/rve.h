@@ -250,6 +250,27 @@ uint32_t rve_update_ex(RveHandle h,
                        int32_t tangent_request,
                        struct RveInfo *info);
 
+// `rve_update_ex` over a host time increment `dtime` (the UMAT's `DTIME`, in the host's
+// time units). Same units, conventions, outputs, statuses and rules.
+//
+// Implicit integration (`solver.integration = "implicit"`, the default) ignores `dtime`.
+// IMPL-EX (`"implex"`) extrapolates the interface history over this step in proportion to
+// `dtime / dtime_n`, `dtime_n` being the time increment of the step that led to the
+// committed state. `dtime <= 0` means "no time": the step counts as long as the last,
+// which is what `rve_update` and `rve_update_ex` pass. Non-finite `dtime`:
+// `INVALID_ARGUMENT`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_update_timed(RveHandle h,
+                          const double *strain,
+                          double dtime,
+                          double *stress,
+                          double *tangent,
+                          int32_t tangent_request,
+                          struct RveInfo *info);
+
 // Trial update: `rve_update_ex` without `info`. Same units, conventions, statuses and
 // rules (stress and tangent written only on success; `tangent` may be NULL only with
 // `RVE_TANGENT_REQUEST_NONE`).

@@ -116,6 +116,7 @@ impl RveInfo {
 pub(crate) fn update_entry(
     entry: &Arc<Entry>,
     strain: [f64; 3],
+    dtime: f64,
     request: RveTangentRequest,
 ) -> FfiResult<Response> {
     let mut instance = entry.lock()?;
@@ -124,7 +125,7 @@ pub(crate) fn update_entry(
         RveTangentRequest::None | RveTangentRequest::Elastic => TangentRequest::None,
     };
     let mut r = with_workspace(&entry.model, |ws| {
-        instance.update(strain, ws, solve_request)
+        instance.update_timed(strain, dtime, ws, solve_request)
     })?;
     if request == RveTangentRequest::Elastic {
         r.tangent = entry.model.elastic_tangent;
@@ -263,9 +264,75 @@ pub unsafe extern "C" fn rve_update_ex(
     tangent_request: i32,
     info: *mut RveInfo,
 ) -> u32 {
-    guard("rve_update_ex", || {
+    update_core(
+        "rve_update_ex",
+        h,
+        strain,
+        0.0,
+        stress,
+        tangent,
+        tangent_request,
+        info,
+    )
+}
+
+/// `rve_update_ex` over a host time increment `dtime` (the UMAT's `DTIME`, in the host's
+/// time units). Same units, conventions, outputs, statuses and rules.
+///
+/// Implicit integration (`solver.integration = "implicit"`, the default) ignores `dtime`.
+/// IMPL-EX (`"implex"`) extrapolates the interface history over this step in proportion to
+/// `dtime / dtime_n`, `dtime_n` being the time increment of the step that led to the
+/// committed state. `dtime <= 0` means "no time": the step counts as long as the last,
+/// which is what `rve_update` and `rve_update_ex` pass. Non-finite `dtime`:
+/// `INVALID_ARGUMENT`.
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn rve_update_timed(
+    h: RveHandle,
+    strain: *const f64,
+    dtime: f64,
+    stress: *mut f64,
+    tangent: *mut f64,
+    tangent_request: i32,
+    info: *mut RveInfo,
+) -> u32 {
+    update_core(
+        "rve_update_timed",
+        h,
+        strain,
+        dtime,
+        stress,
+        tangent,
+        tangent_request,
+        info,
+    )
+}
+
+/// The body of `rve_update_ex` and `rve_update_timed`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn update_core(
+    name: &str,
+    h: RveHandle,
+    strain: *const f64,
+    dtime: f64,
+    stress: *mut f64,
+    tangent: *mut f64,
+    tangent_request: i32,
+    info: *mut RveInfo,
+) -> u32 {
+    guard(name, || {
         let args = (|| {
             let request = RveTangentRequest::from_i32(tangent_request)?;
+            if !dtime.is_finite() {
+                return Err(Failure::new(
+                    RveStatus::InvalidArgument,
+                    format!("dtime {dtime} is not finite"),
+                ));
+            }
             let strain: [f64; 3] = slice(strain, 3, "strain")?.try_into().expect("3");
             let stress = slice_mut(stress, 3, "stress")?;
             let tangent = if request == RveTangentRequest::None {
@@ -291,7 +358,7 @@ pub unsafe extern "C" fn rve_update_ex(
             }
         };
         let entry = entry?;
-        match update_entry(&entry, strain, request) {
+        match update_entry(&entry, strain, dtime, request) {
             Ok(r) => {
                 stress.copy_from_slice(&r.stress);
                 if let Some(t) = tangent {

@@ -408,7 +408,9 @@ impl Umat {
         };
         self.solves.fetch_add(1, Ordering::Relaxed);
         let model = p.material.model.clone();
-        let r = with_workspace(&model, |ws| p.instance.update(strain, ws, request));
+        let r = with_workspace(&model, |ws| {
+            p.instance.update_timed(strain, c.dtime, ws, request)
+        });
         p.last = r.as_ref().ok().map(|r| (strain, *r));
         Ok((r?, true))
     }

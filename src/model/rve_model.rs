@@ -224,7 +224,14 @@ impl Model {
         if !reuse {
             let ratio = implex::step_ratio(committed.implex.step, dt);
             let condensed = implex::factorize_step(&problem, committed, ratio, ws)?;
-            let tangent = self.hom.tangent_from_condensed(&condensed);
+            // `D_ex` is symmetric (eq. 18 with `K_ex` symmetric): its symmetric part
+            // removes the round-off of `G^T K_ex^-1 G`, and the stress `D_ex eps` is
+            // formed with the same matrix, so the tangent stays its exact derivative.
+            let mut tangent = self.hom.tangent_from_condensed(&condensed);
+            for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+                let mean = 0.5 * (tangent[3 * i + j] + tangent[3 * j + i]);
+                (tangent[3 * i + j], tangent[3 * j + i]) = (mean, mean);
+            }
             let szz = self.hom.szz_tangent(ws.factorization().kg());
             if !tangent.iter().chain(&szz).all(|v| v.is_finite()) {
                 return Err(Error::Solve {
