@@ -23,7 +23,14 @@
 //          H is resized to n and receives the handles (int64 ids, exact in a double)
 //   long   rveUpdate(H, exx, eyy, gxy, sxx, syy, sxy, d11, ..., d33)  trial update of all
 //          points, consistent tangent (16 arrays of equal length)
+//   long   rveInitText(string toml, string baseDir, long n, real[int] H)   the same from
+//          scene text (rve_init_text; relative paths in it against baseDir, "" = the
+//          working directory): a script can derive a scene, e.g. a weaker ITZ
 //   long   rveUpdateElastic(same 16 arrays)   same, tangent = elastic tangent of the virgin RVE
+//   long   rveUpdateTimed(H, DT, exx, ..., d33)   rveUpdate over the host time increment
+//          DT[k] of each point (rve_update_timed: IMPL-EX scales its extrapolation by
+//          DT[k] / the DT of the committed increment; DT[k] <= 0: none, as rveUpdate),
+//          17 arrays of equal length
 //   long   rveStress(H, exx, eyy, gxy, sxx, syy, sxy)   trial update, stress only
 //   long   rveCommit(H)   accept the last trial of every point (end of a macro increment)
 //   long   rveRevert(H)   discard the trials
@@ -43,6 +50,7 @@
 #include <vector>
 
 #include "ff++.hpp"
+#include "AFunction_ext.hpp"  // OneOperator4_
 
 #include "rve.h"
 
@@ -63,12 +71,16 @@ long fail(const string &where, uint32_t st, const string &detail) {
 }
 
 // Status of a library call, with rve_last_error() captured on failure.
-long check(const string &where, uint32_t st) {
-  if (st == RVE_STATUS_OK) return 0;
+string library_error() {
   size_t len = rve_last_error(nullptr, 0);
   vector<char> buf(len + 1, '\0');
   rve_last_error(buf.data(), buf.size());
-  return fail(where, st, string(buf.data()));
+  return string(buf.data());
+}
+
+long check(const string &where, uint32_t st) {
+  if (st == RVE_STATUS_OK) return 0;
+  return fail(where, st, library_error());
 }
 
 // A handle stored in a double: must be an exact integer in int64 range (converting
@@ -91,19 +103,20 @@ long handles_of(const string &where, const KN<double> &H, vector<RveHandle> *out
   return 0;
 }
 
-// ---- rveInit(string scene, long n, real[int] H) ------------------------------------
-long rve_ff_init(string *const &scene, const long &n, KN<double> *const &H) {
+// ---- rveInit(string scene, long n, real[int] H), rveInitText(toml, baseDir, n, H) ----
+// n instances: the first made by `first` (parses and meshes the scene), the others virgin
+// clones of its model (no parsing or meshing); H is resized to n and receives the handles.
+// On failure no instance is left behind and H is untouched.
+template <class First>
+long init_n(const string &where, long n, KN<double> *H, First first) {
   g_last_error.clear();
-  const string where = "rveInit(\"" + *scene + "\")";
   if (n < 1) return fail(where, RVE_STATUS_INVALID_ARGUMENT, "n must be >= 1");
   vector<RveHandle> hs;
   hs.reserve(n);
   RveHandle h0 = 0;
-  long st = check(where, rve_init_file(scene->c_str(), &h0));
+  long st = check(where, first(&h0));
   if (st) return st;
   hs.push_back(h0);
-  // The other points share the first one's model (meshed once): a clone is a new
-  // virgin instance without parsing or meshing.
   for (long k = 1; k < n && st == 0; k++) {
     RveHandle h = 0;
     st = check(where + " clone", rve_clone_model(h0, &h));
@@ -121,12 +134,54 @@ long rve_ff_init(string *const &scene, const long &n, KN<double> *const &H) {
   return 0;
 }
 
-// ---- rveUpdate / rveUpdateElastic / rveStress ----------------------------------------
-// args: H, exx, eyy, gxy, sxx, syy, sxy [, d11, ..., d33]
-long update_all(const string &where, KN<double> *const *a, int nargs, int32_t request) {
+long rve_ff_init(string *const &scene, const long &n, KN<double> *const &H) {
+  const char *path = scene->c_str();
+  return init_n("rveInit(\"" + *scene + "\")", n, H,
+                [path](RveHandle *h) { return rve_init_file(path, h); });
+}
+
+long rve_ff_init_text(string *const &toml, string *const &base, const long &n,
+                      KN<double> *const &H) {
+  const char *text = toml->c_str(), *dir = base->empty() ? nullptr : base->c_str();
+  return init_n("rveInitText", n, H,
+                [text, dir](RveHandle *h) { return rve_init_text(text, dir, h); });
+}
+
+// ---- rveUpdate / rveUpdateElastic / rveStress / rveUpdateTimed -------------------------
+// Every point's trial update, statuses[k] its status. Without times (dt NULL) one
+// rve_update_batch call on this thread (nthreads = 1: the host may be parallel itself, and
+// results do not depend on nthreads). With times rve_update_timed point by point (there is
+// no timed batch call); every point is attempted, as the batch call does. Returns the
+// batch's status: OK, BATCH_FAILED (detail: the first failed point's message, as the batch
+// call leaves it) or a status of the batch call itself.
+uint32_t update_points(const vector<RveHandle> &hs, const double *dt, const double *strain,
+                       double *stress, double *tangent, uint32_t *statuses, int32_t request,
+                       string *detail) {
+  const size_t n = hs.size();
+  if (!dt) {
+    uint32_t st = rve_update_batch(hs.data(), n, strain, stress, tangent, statuses, request, 1);
+    if (st != RVE_STATUS_OK) *detail = library_error();
+    return st;
+  }
+  uint32_t st = RVE_STATUS_OK;
+  for (size_t k = 0; k < n; k++) {
+    statuses[k] = rve_update_timed(hs[k], strain + 3 * k, dt[k], stress + 3 * k,
+                                   tangent ? tangent + 9 * k : nullptr, request, nullptr);
+    if (statuses[k] != RVE_STATUS_OK && st == RVE_STATUS_OK) {
+      st = RVE_STATUS_BATCH_FAILED;
+      *detail = "item " + to_string(k) + ": " + library_error();
+    }
+  }
+  return st;
+}
+
+// args: H [, DT], exx, eyy, gxy, sxx, syy, sxy [, d11, ..., d33]
+long update_all(const string &where, KN<double> *const *a, int nargs, int32_t request,
+                bool timed) {
   g_last_error.clear();
   const KN<double> &H = *a[0];
   const long n = H.N();
+  const int e0 = timed ? 2 : 1;  // the first strain array
   for (int i = 1; i < nargs; i++)
     if (a[i]->N() != n) {
       ostringstream m;
@@ -136,18 +191,20 @@ long update_all(const string &where, KN<double> *const *a, int nargs, int32_t re
   vector<RveHandle> hs;
   long st = handles_of(where, H, &hs);
   if (st) return st;
-  vector<double> strain(3 * n), stress(3 * n);
+  vector<double> strain(3 * n), stress(3 * n), dt(timed ? n : 0);
   vector<double> tangent(request == RVE_TANGENT_REQUEST_NONE ? 0 : 9 * n);
   vector<uint32_t> statuses(n, RVE_STATUS_OK);
-  for (long k = 0; k < n; k++)
-    for (int c = 0; c < 3; c++) strain[3 * k + c] = (*a[1 + c])[k];
-  // One call for all points, on this thread (nthreads = 1: the host may be parallel
-  // itself, and results do not depend on nthreads). On BATCH_FAILED the library's message
-  // names the first failed item; the script gets that item's own status (ABSURD_STRAIN,
+  for (long k = 0; k < n; k++) {
+    for (int c = 0; c < 3; c++) strain[3 * k + c] = (*a[e0 + c])[k];
+    if (timed) dt[k] = (*a[1])[k];
+  }
+  string detail;
+  uint32_t raw = update_points(hs, timed ? dt.data() : nullptr, strain.data(), stress.data(),
+                               tangent.empty() ? nullptr : tangent.data(), statuses.data(),
+                               request, &detail);
+  st = raw == RVE_STATUS_OK ? 0 : fail(where, raw, detail);
+  // On BATCH_FAILED the script gets the first failed point's own status (ABSURD_STRAIN,
   // SOLVER_FAILED, ...), which says more than "some item failed".
-  st = check(where, rve_update_batch(hs.data(), (size_t)n, strain.data(), stress.data(),
-                                     tangent.empty() ? nullptr : tangent.data(),
-                                     statuses.data(), request, 1));
   if (st == RVE_STATUS_BATCH_FAILED) {
     string msg = g_last_error;
     long first = 0;
@@ -170,15 +227,15 @@ long update_all(const string &where, KN<double> *const *a, int nargs, int32_t re
   if (st) return st;
   // Written only on success, as the C API does.
   for (long k = 0; k < n; k++) {
-    for (int c = 0; c < 3; c++) (*a[4 + c])[k] = stress[3 * k + c];
+    for (int c = 0; c < 3; c++) (*a[e0 + 3 + c])[k] = stress[3 * k + c];
     if (!tangent.empty())
-      for (int ij = 0; ij < 9; ij++) (*a[7 + ij])[k] = tangent[9 * k + ij];  // row-major
+      for (int ij = 0; ij < 9; ij++) (*a[e0 + 6 + ij])[k] = tangent[9 * k + ij];  // row-major
   }
   return 0;
 }
 
 // A FreeFEM operator with `NARGS` arrays (the stock OneOperatorN_ stop at 7 or so).
-template <int NARGS, int32_t REQUEST>
+template <int NARGS, int32_t REQUEST, bool TIMED = false>
 class UpdateOp : public E_F0mps {
  public:
   typedef long Result;
@@ -196,7 +253,7 @@ class UpdateOp : public E_F0mps {
   AnyType operator()(Stack s) const {
     KN<double> *a[NARGS];
     for (int i = 0; i < NARGS; i++) a[i] = GetAny<KN<double> *>((*e[i])(s));
-    return SetAny<long>(update_all(name, a, NARGS, REQUEST));
+    return SetAny<long>(update_all(name, a, NARGS, REQUEST, TIMED));
   }
   operator aType() const { return atype<long>(); }
 };
@@ -212,6 +269,12 @@ class UpdateElastic : public UpdateOp<16, RVE_TANGENT_REQUEST_ELASTIC> {
   UpdateElastic(const basicAC_F0 &a) : UpdateOp(a, "rveUpdateElastic") {}
   static ArrayOfaType typeargs() { return ArrayOfaType(atype<KN<double> *>(), true); }
   static E_F0 *f(const basicAC_F0 &a) { return new UpdateElastic(a); }
+};
+class UpdateTimed : public UpdateOp<17, RVE_TANGENT_REQUEST_CONSISTENT, true> {
+ public:
+  UpdateTimed(const basicAC_F0 &a) : UpdateOp(a, "rveUpdateTimed") {}
+  static ArrayOfaType typeargs() { return ArrayOfaType(atype<KN<double> *>(), true); }
+  static E_F0 *f(const basicAC_F0 &a) { return new UpdateTimed(a); }
 };
 class UpdateStress : public UpdateOp<7, RVE_TANGENT_REQUEST_NONE> {
  public:
@@ -288,7 +351,10 @@ static void Load_Init() {
     ExecError("rve_ff: librve ABI mismatch");
   }
   Global.Add("rveInit", "(", new OneOperator3_<long, string *, long, KN<double> *>(rve_ff_init));
+  Global.Add("rveInitText", "(",
+             new OneOperator4_<long, string *, string *, long, KN<double> *>(rve_ff_init_text));
   Global.Add("rveUpdate", "(", new OneOperatorCode<UpdateConsistent>());
+  Global.Add("rveUpdateTimed", "(", new OneOperatorCode<UpdateTimed>());
   Global.Add("rveUpdateElastic", "(", new OneOperatorCode<UpdateElastic>());
   Global.Add("rveStress", "(", new OneOperatorCode<UpdateStress>());
   Global.Add("rveCommit", "(", new OneOperator1_<long, KN<double> *>(rve_ff_commit));
