@@ -17,6 +17,14 @@
       ccx's Newton iterations of every increment of step STEP, one column per run, and
       the force residuals of each run's increment with the most iterations, as Markdown.
 
+  calculix_report.py cycle JOB
+      A tension (time <= 1), unloading (to time 2) and compression (to time 3) cycle under
+      displacement control (specimen_weak.inp, specimen_notch.inp): one Markdown line of
+      figures. Exit status 1 unless the run reached time 3, the force falls after its
+      peak by at least DROP within the tension, the force at U = 0 after the unloading is
+      below ZERO_FORCE times the peak force, and the compression's secant slope (F/U from
+      U = 0 to the end) exceeds the unloading's (from its start to U = 0).
+
   calculix_report.py band JOB
       The localization of specimen_band.inp: the force's peak in the tension (time <= 2)
       and its lowest value after it, and the mean strains of the band (between the node
@@ -29,6 +37,14 @@ import sys
 
 TOLERANCE = 1e-6
 DROP = 0.01
+# With IMPL-EX every RVE is linear through the origin within a host increment (secant
+# unloading, penalty contact), so at U = 0 the host's exact solution is u = 0, F = 0; ccx's
+# second iteration solves the increment's linear system with its exact tangent, leaving
+# round-off (about 1e-16 of the peak force in these runs). 1e-9 leaves room for the
+# conditioning of the host and RVE systems and stays far below the residual force that
+# ccx's convergence criterion tolerates (0.5 % of the average force): an unloading that
+# does not end at the origin fails.
+ZERO_FORCE = 1e-9
 
 
 def dat_blocks(path, kind, nset=None):
@@ -171,6 +187,62 @@ def band(job):
                  "with the band stretching and the sound rows unloading)")
 
 
+def phases(c):
+    """The tension (time <= 1), unloading (1 < time <= 2) and compression (time > 2) of a
+    curve [(time, U, F)], each starting from the previous phase's last point."""
+    eps = 1e-9
+    tension = [p for p in c if p[0] <= 1 + eps]
+    unloading = [tension[-1]] + [p for p in c if 1 + eps < p[0] <= 2 + eps]
+    compression = [unloading[-1]] + [p for p in c if p[0] > 2 + eps]
+    return tension, unloading, compression
+
+
+def secant(points):
+    """(F_last - F_first) / (U_last - U_first)."""
+    (_, u0, f0), (_, u1, f1) = points[0], points[-1]
+    return (f1 - f0) / (u1 - u0)
+
+
+def first_peak(points):
+    """The index of the first local maximum of the force (the last point if it rises to
+    the end)."""
+    k = 0
+    while k + 1 < len(points) and points[k + 1][2] >= points[k][2]:
+        k += 1
+    return k
+
+
+def cycle_figures(job):
+    c = curve(job)
+    tension, unloading, compression = phases(c)
+    peak = first_peak(tension)
+    low = min(tension[peak:], key=lambda p: p[2])
+    return {"peak": tension[peak], "low": low,
+            "zero": unloading[-1], "unload": secant(unloading),
+            "compress": secant(compression)}
+
+
+def cycle(job):
+    end = curve(job)[-1][0]
+    if abs(end - 3.0) > 1e-9:
+        sys.exit(f"cycle {job}: ends at time {end:g}, not at the end of the compression (3)")
+    f = cycle_figures(job)
+    (_, up, fp), (_, ul, fl), (_, u0, f0) = f["peak"], f["low"], f["zero"]
+    print(f"peak {fp:.2f} N at U = {up:.4e} mm, down to {fl:.2f} N "
+          f"({100 * (1 - fl / fp):.1f} %) at U = {ul:.4e} mm; at U = {u0:.1e} mm after the "
+          f"unloading F = {f0:.2e} N ({abs(f0) / fp:.0e} of the peak); secant slopes: "
+          f"unloading {f['unload']:.4e} N/mm, compression {f['compress']:.4e} N/mm "
+          f"(ratio {f['compress'] / f['unload']:.2f})")
+    checks = [
+        (fl < (1 - DROP) * fp, f"the force does not fall by {DROP:.0%} after its peak"),
+        (abs(f0) <= ZERO_FORCE * fp, f"|F| at U = 0 exceeds {ZERO_FORCE:.0e} of the peak"),
+        (f["compress"] > f["unload"], "the compression is not stiffer than the unloading"),
+    ]
+    failed = [why for ok, why in checks if not ok]
+    if failed:
+        sys.exit(f"cycle {job}: " + "; ".join(failed))
+
+
 def converged(job, step):
     """The `sta` rows of the converged increments of step `step`."""
     return [r for r in sta(job) if r[0] == step and r[3]]
@@ -203,6 +275,8 @@ if __name__ == "__main__":
         specimen(runs)
     elif sys.argv[1] == "iterations":
         iterations(int(sys.argv[2]), [tuple(a.split("=", 1)) for a in sys.argv[3:]])
+    elif sys.argv[1] == "cycle":
+        cycle(sys.argv[2])
     elif sys.argv[1] == "band":
         band(sys.argv[2])
     else:
