@@ -3,7 +3,29 @@
 ! (value or reference, array layout, width) shows up here. scripts/test-fortran checks the
 ! declarations against include/rve.h; this checks the calls.
 !
-! Usage: api_check [SCENE_DIR]      (default: scenes; uses SCENE_DIR/paper_rve.toml)
+! Given the CSV of c_examples/implex_time.c (an IMPL-EX path with non-uniform time
+! increments through C's rve_update_timed), it also checks that the host's time increment
+! passed through the module gives C's results bit for bit (implex_time):
+!  1. rve_update_timed, two calls per increment as a host's Newton makes them (a wrong
+!     iterate half-way, then the increment's strain, both with the increment's DTIME),
+!     then rve_commit; the second call reuses the increment's factorization
+!     (solver.fast_path): one factorization per increment;
+!  2. rve_umat with the Abaqus argument list (NTENS = 3, plane stress, NSTATV = 3,
+!     PROPS(1:6) = 0: the scene's values and the consistent tangent, CMNAME
+!     PAPER_RVE_HOST_IMPLEX), STATEV reset before every call as CalculiX does; each
+!     increment is called with STRAN = the last increment's strain, DSTRAN = the step,
+!     TIME(2) = the increment's start and DTIME: at every fourth increment first an attempt
+!     with twice the step and twice the DTIME that the host cuts back (same KINC, smaller
+!     DTIME: the library reverts it), then a wrong iterate half-way and the increment's
+!     strain. The library commits an increment at the first call of the next.
+! Stress and tangent (DDSDDE(i, j) = d s_i / d e_j = C's tangent[3 (i - 1) + j - 1]) must
+! equal C's bit for bit. The inputs are exact: the path's strains and times are small
+! integers times powers of two, so STRAN + DSTRAN, the half-way and doubled strains and
+! TIME + DTIME are exact.
+!
+! Usage: api_check [SCENE_DIR [IMPLEX.csv]]   (default: scenes; uses SCENE_DIR/paper_rve.toml
+!        and, with IMPLEX.csv, SCENE_DIR/paper_rve_host_implex.toml, found by the UMAT
+!        through MESORVE_SCENE_PATH=SCENE_DIR)
 ! Exit status 0 when every check passed.
 program api_check
   use rve
@@ -47,6 +69,7 @@ program api_check
   call batch()
   call last_error_raw()
   call write_vtk()
+  if (command_argument_count() >= 2) call implex_time()
 
   call expect_status(rve_free(h), RVE_STATUS_OK, 'rve_free')
   call expect_status(rve_free(h2), RVE_STATUS_OK, 'rve_free')
@@ -77,8 +100,9 @@ contains
   ! rve_update, rve_update_ex and rve_update_f agree; the tangent requests.
   subroutine updates()
     real(c_double) :: s1(3), s2(3), s3(3), d1(3, 3), d2(3, 3), d3(3, 3), e1(3, 3), e2(3, 3)
+    real(c_double) :: s4(3), d4(3, 3)
     type(rve_info) :: info
-    s1 = 0; s2 = 0; s3 = 0; d1 = 0; d2 = 0; d3 = 0; e1 = 0; e2 = 0
+    s1 = 0; s2 = 0; s3 = 0; d1 = 0; d2 = 0; d3 = 0; e1 = 0; e2 = 0; s4 = 0; d4 = 0
     info = rve_info(0, 0, 0, 0, 0.0_c_double, -1.0_c_double)
     call expect_status(rve_update(h, eps1, s1, d1, RVE_TANGENT_REQUEST_CONSISTENT), &
         RVE_STATUS_OK, 'rve_update')
@@ -87,6 +111,11 @@ contains
     call expect_status(rve_update_f(h, eps1, s3, d3), RVE_STATUS_OK, 'rve_update_f')
     call expect(all_bits(s1, s2) .and. all_bits(s1, s3), 'the three updates give one stress')
     call expect(all_bits(reshape(d1, [9]), reshape(d2, [9])), 'rve_update = rve_update_ex')
+    ! This scene is integrated implicitly: the time increment changes nothing.
+    call expect_status(rve_update_timed(h, eps1, 0.5_c_double, s4, d4, &
+        RVE_TANGENT_REQUEST_CONSISTENT, info), RVE_STATUS_OK, 'rve_update_timed')
+    call expect(all_bits(s1, s4) .and. all_bits(reshape(d1, [9]), reshape(d4, [9])), &
+        'rve_update_timed = rve_update on an implicit scene')
     call expect(all_bits(reshape(d3, [9]), reshape(transpose(d1), [9])), &
         'rve_update_f returns the transpose of the raw array')
     call expect(info%iterations >= 1 .and. info%substeps >= 1 .and. &
@@ -277,6 +306,138 @@ contains
     call expect(len(rve_last_error_f()) == 0, 'no message after a success')
     h3 = 0
   end subroutine last_error_raw
+
+  ! The host's time increment through the module against C's rve_update_timed (see the
+  ! header). The CSV's columns: step, time, dtime, strain(3), stress(3), D11..D33 (C,
+  ! row-major), iterations, substeps, factorizations.
+  subroutine implex_time()
+    character(len=4096) :: csv
+    real(c_double), allocatable :: ref(:, :)
+    call get_command_argument(2, csv)
+    ref = read_csv(trim(csv), 21)
+    call expect(size(ref, 2) > 0, 'rows in ' // trim(csv))
+    call implex_module(ref, trim(dir) // '/paper_rve_host_implex.toml')
+    call implex_umat(ref, 'PAPER_RVE_HOST_IMPLEX')
+  end subroutine implex_time
+
+  ! A CSV of numbers after one header line: row k in table(:, k). No rows when the file
+  ! cannot be read.
+  function read_csv(path, cols) result(table)
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: cols
+    real(c_double), allocatable :: table(:, :)
+    real(c_double) :: row(cols)
+    integer :: u, ios, rows
+    allocate (table(cols, 0))
+    open (newunit=u, file=path, status='old', action='read', iostat=ios)
+    if (ios /= 0) return
+    read (u, *, iostat=ios)             ! the header
+    rows = 0
+    do while (ios == 0)
+      read (u, *, iostat=ios) row
+      if (ios == 0) then
+        table = reshape([table, row], [cols, rows + 1])
+        rows = rows + 1
+      end if
+    end do
+    close (u)
+  end function read_csv
+
+  ! Stress and tangent (d(i, j) = d s_i / d e_j) against row k of C's results.
+  logical function matches(ref, k, stress, d)
+    real(c_double), intent(in) :: ref(:, :), stress(3), d(3, 3)
+    integer, intent(in) :: k
+    matches = all_bits(stress, ref(7:9, k)) .and. &
+        all_bits(reshape(transpose(d), [9]), ref(10:18, k))
+  end function matches
+
+  ! Part 1: rve_update_timed, a wrong iterate then the increment's strain.
+  subroutine implex_module(ref, path)
+    real(c_double), intent(in) :: ref(:, :)
+    character(len=*), intent(in) :: path
+    integer(c_int64_t) :: hi
+    integer(c_int32_t) :: st
+    real(c_double) :: last(3), eps(3), stress(3), raw(3, 3), d(3, 3)
+    type(rve_info) :: info
+    integer :: k, factorizations
+    logical :: ok
+    hi = 0
+    call expect_status(rve_init_file_f(path, hi), RVE_STATUS_OK, 'rve_init_file_f ' // path)
+    last = 0; ok = hi /= 0; factorizations = 0
+    do k = 1, size(ref, 2)
+      eps = ref(4:6, k)
+      st = rve_update_timed(hi, 0.5_c_double * (last + eps), ref(3, k), stress, raw, &
+          RVE_TANGENT_REQUEST_CONSISTENT, info)
+      factorizations = factorizations + int(info%factorizations)
+      ok = ok .and. st == RVE_STATUS_OK
+      st = rve_update_timed(hi, eps, ref(3, k), stress, raw, RVE_TANGENT_REQUEST_CONSISTENT, &
+          info)
+      factorizations = factorizations + int(info%factorizations)
+      d = transpose(raw)       ! raw holds C's row-major array
+      ok = ok .and. st == RVE_STATUS_OK .and. matches(ref, k, stress, d)
+      st = rve_commit(hi)
+      ok = ok .and. st == RVE_STATUS_OK
+      last = eps
+    end do
+    call expect(ok, 'implex: rve_update_timed equals C''s results bit for bit')
+    call expect(factorizations == size(ref, 2), 'implex: one factorization per increment')
+    call expect_status(rve_free(hi), RVE_STATUS_OK, 'rve_free')
+    write (*, '(a,i0,a,i0,2a)') 'implex, module rve_update_timed: ', size(ref, 2), &
+        ' increments (2 calls each, ', factorizations, ' factorizations) ', verdict(ok)
+  end subroutine implex_module
+
+  ! One rve_umat call for point NOEL = 1 of material `name` (NTENS = 3).
+  subroutine call_umat(name, stran, dstran, time, dtime, kinc, stress, ddsdde, pnewdt)
+    character(len=*), intent(in) :: name
+    real(c_double), intent(in) :: stran(3), dstran(3), time(2), dtime
+    integer, intent(in) :: kinc
+    real(c_double), intent(inout) :: stress(3), ddsdde(3, 3), pnewdt
+    character(len=80) :: cmname
+    real(c_double) :: statev(3), props(6), sse, spd, scd, rpl, ddsddt(3), drplde(3)
+    real(c_double) :: drpldt, predef(1), dpred(1), coords(3), rot(3, 3)
+    cmname = name
+    statev = 0; props = 0; sse = 0; spd = 0; scd = 0; rpl = 0; ddsddt = 0; drplde = 0
+    drpldt = 0; predef = 0; dpred = 0; coords = 0
+    rot = reshape([1, 0, 0, 0, 1, 0, 0, 0, 1], [3, 3])
+    call rve_umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpldt, &
+        stran, dstran, time, dtime, 20.0_c_double, 0.0_c_double, predef, dpred, cmname, &
+        2, 1, 3, 3, props, 6, coords, rot, pnewdt, 1.0_c_double, rot, rot, 1, 1, 0, 0, 1, &
+        kinc, len(cmname, c_size_t))
+  end subroutine call_umat
+
+  ! Part 2: rve_umat with DTIME, cut-backs and wrong iterates.
+  subroutine implex_umat(ref, name)
+    real(c_double), intent(in) :: ref(:, :)
+    character(len=*), intent(in) :: name
+    real(c_double) :: stran(3), eps(3), stress(3), ddsdde(3, 3), pnewdt, time(2), dt
+    integer :: k, cuts
+    logical :: ok
+    stran = 0; ok = .true.; cuts = 0
+    do k = 1, size(ref, 2)
+      eps = ref(4:6, k); dt = ref(3, k)
+      time = ref(2, k) - dt
+      pnewdt = 1e36_c_double
+      if (mod(k, 4) == 3) then
+        call call_umat(name, stran, 2 * (eps - stran), time, 2 * dt, k, stress, ddsdde, pnewdt)
+        cuts = cuts + 1
+      end if
+      call call_umat(name, stran, 0.5_c_double * (eps - stran), time, dt, k, stress, ddsdde, &
+          pnewdt)
+      call call_umat(name, stran, eps - stran, time, dt, k, stress, ddsdde, pnewdt)
+      ok = ok .and. pnewdt > 1 .and. matches(ref, k, stress, ddsdde)
+      stran = eps
+    end do
+    call expect(ok, 'implex: rve_umat''s STRESS and DDSDDE equal C''s bit for bit')
+    write (*, '(a,i0,a,i0,2a)') 'implex, rve_umat with DTIME: ', size(ref, 2), &
+        ' increments (', cuts, ' cut back) ', verdict(ok)
+  end subroutine implex_umat
+
+  function verdict(ok) result(s)
+    logical, intent(in) :: ok
+    character(len=:), allocatable :: s
+    s = 'DIFFERENT from C'
+    if (ok) s = 'bit-identical to C'
+  end function verdict
 
   subroutine expect(ok, what)
     logical, intent(in) :: ok
