@@ -44,7 +44,9 @@
  * residual), then after the last increment one line per point (strain, stress), all with
  * 17 significant digits; a restart appends to it. stdout: per rank, the wall time, the
  * time spent in the RVE calls, the CPU time and the peak RSS (getrusage: ru_utime +
- * ru_stime, ru_maxrss); with -v 1 also each macro iteration's residual.
+ * ru_stime, ru_maxrss), the instance updates and how many of them were answered without a
+ * solve (rve_fast_updates, since the instances were created or loaded); with -v 1 also
+ * each macro iteration's residual.
  *
  * Usage: mpirun -n P fe2_plate_mpi [-s SCENE] [-o OUT.csv] [-x NX] [-y NY] [-n NINC]
  *                                  [-e EPSEND] [-t THREADS] [-c DIR -k K | -r DIR] [-v 1]
@@ -159,6 +161,21 @@ static void element_strain(const Mesh *m, int e, const double *u, double eps[3])
 /* Banded storage: K(i, j) with |i - j| <= bw at band[i * (2 bw + 1) + (j - i + bw)]. */
 static double *band_at(double *band, int bw, int i, int j) {
     return &band[(size_t)i * (size_t)(2 * bw + 1) + (size_t)(j - i + bw)];
+}
+
+/* Updates of the instances h[0..count) answered without a solve (rve_fast_updates): the
+ * fast path's answers and, with IMPL-EX, the updates that reuse their increment's
+ * factorization. */
+static unsigned long fast_updates(const RveHandle *h, int count) {
+    unsigned long total = 0;
+    int i;
+    for (i = 0; i < count; i++) {
+        uint64_t n = 0;
+        uint32_t st = rve_fast_updates(h[i], &n);
+        if (st != RVE_STATUS_OK) die("rve_fast_updates", st);
+        total += (unsigned long)n;
+    }
+    return total;
 }
 
 /* Solves K x = r in place (r <- x) by banded LU without pivoting. The prescribed dofs carry
@@ -291,6 +308,7 @@ int main(int argc, char **argv) {
     RveHandle *h;
     double *u, *du, *eps, *sig_tan, *all = NULL, *band = NULL, *res = NULL;
     double t_start, t_rve = 0.0, t_init;
+    long updates = 0; /* this rank's instance updates */
     uint32_t *statuses;
     FILE *csv = NULL;
 
@@ -377,6 +395,7 @@ int main(int argc, char **argv) {
             MPI_Bcast(u, m.ndof, MPI_DOUBLE, 0, MPI_COMM_WORLD);
             for (e = 0; e < count; e++) element_strain(&m, first + e, u, &eps[3 * e]);
             t0 = now();
+            updates += count;
             st = rve_update_batch(h, (size_t)count, eps, sig_tan, sig_tan + 3 * (size_t)count,
                                   statuses, RVE_TANGENT_REQUEST_CONSISTENT, nthreads);
             t_rve += now() - t0;
@@ -483,7 +502,7 @@ int main(int argc, char **argv) {
     /* Per-rank figures, printed by rank 0 in rank order. */
     {
         struct rusage ru;
-        double mine[5], *every = rank == 0 ? xmalloc(sizeof(double) * 5 * (size_t)nranks) : NULL;
+        double mine[7], *every = rank == 0 ? xmalloc(sizeof(double) * 7 * (size_t)nranks) : NULL;
         getrusage(RUSAGE_SELF, &ru);
         mine[0] = now() - t_start;
         mine[1] = t_init;
@@ -491,15 +510,17 @@ int main(int argc, char **argv) {
         mine[3] = (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
                   1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
         mine[4] = (double)ru.ru_maxrss / 1024.0; /* Linux: KiB */
-        MPI_Gather(mine, 5, MPI_DOUBLE, every, 5, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        mine[5] = (double)updates;
+        mine[6] = (double)fast_updates(h, count);
+        MPI_Gather(mine, 7, MPI_DOUBLE, every, 7, MPI_DOUBLE, 0, MPI_COMM_WORLD);
         if (rank == 0) {
             printf("ranks %d, points %d, increments %d..%d, threads per rank %zu\n", nranks,
                    m.nelem, inc0 + 1, stop_after > 0 ? stop_after : ninc, nthreads);
-            printf("rank  points  wall_s  init_s  rve_s   cpu_s  peak_rss_MiB\n");
+            printf("rank  points  wall_s  init_s  rve_s   cpu_s  peak_rss_MiB  updates  fast\n");
             for (i = 0; i < nranks; i++)
-                printf("%4d  %6d  %6.2f  %6.2f  %5.2f  %6.2f  %12.1f\n", i, counts[i] / 12,
-                       every[5 * i], every[5 * i + 1], every[5 * i + 2], every[5 * i + 3],
-                       every[5 * i + 4]);
+                printf("%4d  %6d  %6.2f  %6.2f  %5.2f  %6.2f  %12.1f  %7.0f  %4.0f\n", i,
+                       counts[i] / 12, every[7 * i], every[7 * i + 1], every[7 * i + 2],
+                       every[7 * i + 3], every[7 * i + 4], every[7 * i + 5], every[7 * i + 6]);
             free(every);
         }
     }
