@@ -32,6 +32,9 @@
 //          DT[k] / the DT of the committed increment; DT[k] <= 0: none, as rveUpdate),
 //          17 arrays of equal length
 //   long   rveStress(H, exx, eyy, gxy, sxx, syy, sxy)   trial update, stress only
+//   long   rveFastUpdates(H, real[int] N)   N is resized to n and receives each point's
+//          updates answered without a solve (rve_fast_updates: the fast path's answers and,
+//          with IMPL-EX, the updates that reuse their increment's factorization)
 //   long   rveCommit(H)   accept the last trial of every point (end of a macro increment)
 //   long   rveRevert(H)   discard the trials
 //   long   rveFree(H)     free every instance and set its entry of H to 0 (a second
@@ -304,6 +307,22 @@ long each(const char *name, KN<double> *const &H) {
   g_last_error = msg;
   return first;
 }
+long rve_ff_fast_updates(KN<double> *const &H, KN<double> *const &N) {
+  g_last_error.clear();
+  vector<RveHandle> hs;
+  long st = handles_of("rveFastUpdates", *H, &hs);
+  if (st) return st;
+  vector<double> counts(hs.size());
+  for (size_t k = 0; k < hs.size(); k++) {
+    uint64_t n = 0;
+    st = check("rveFastUpdates point " + to_string(k), rve_fast_updates(hs[k], &n));
+    if (st) return st;
+    counts[k] = (double)n;
+  }
+  N->resize(hs.size());
+  for (long k = 0; k < (long)hs.size(); k++) (*N)[k] = counts[k];
+  return 0;
+}
 long rve_ff_commit(KN<double> *const &H) { return each<rve_commit, false>("rveCommit", H); }
 long rve_ff_revert(KN<double> *const &H) { return each<rve_revert, false>("rveRevert", H); }
 long rve_ff_free(KN<double> *const &H) { return each<rve_free, true>("rveFree", H); }
@@ -357,6 +376,8 @@ static void Load_Init() {
   Global.Add("rveUpdateTimed", "(", new OneOperatorCode<UpdateTimed>());
   Global.Add("rveUpdateElastic", "(", new OneOperatorCode<UpdateElastic>());
   Global.Add("rveStress", "(", new OneOperatorCode<UpdateStress>());
+  Global.Add("rveFastUpdates", "(",
+             new OneOperator2_<long, KN<double> *, KN<double> *>(rve_ff_fast_updates));
   Global.Add("rveCommit", "(", new OneOperator1_<long, KN<double> *>(rve_ff_commit));
   Global.Add("rveRevert", "(", new OneOperator1_<long, KN<double> *>(rve_ff_revert));
   Global.Add("rveFree", "(", new OneOperator1_<long, KN<double> *>(rve_ff_free));
