@@ -31,6 +31,7 @@ pub fn solver_settings(spec: &SolverSpec) -> Settings {
             IntegrationSpec::Implicit => Integration::Implicit,
             IntegrationSpec::Implex => Integration::Implex,
         },
+        step_check: spec.step_check,
     }
 }
 

@@ -13,8 +13,8 @@ use crate::homogenization::Homogenizer;
 use crate::mesh::{Mesh, Microstructure};
 use crate::scene::{Scene, MAX_STRAIN};
 use crate::solver::{
-    fast_path, implex, solve_increment, Answer, IncrementReport, Integration, LinearSolver,
-    Problem, Settings, TangentRequest, Workspace,
+    fast_path, implex, solve_increment, step_check, Answer, IncrementReport, Integration,
+    LinearSolver, Problem, Settings, TangentRequest, Workspace,
 };
 use crate::state::State;
 
@@ -191,12 +191,23 @@ impl Model {
         if request == TangentRequest::Consistent {
             fast_path::build(&problem, trial, tangent, s_zz_tangent, ws);
         }
+        let mut report = solved.report;
+        if step_check::applies(
+            &problem,
+            committed,
+            trial,
+            report.substeps,
+            report.limit_points,
+        ) {
+            (report.step_too_large, report.check_factorizations) =
+                step_check::depends_on_step(&problem, committed, strain, trial, ws);
+        }
         Ok(Response {
             stress,
             tangent,
             s_zz,
             s_zz_tangent,
-            report: solved.report,
+            report,
         })
     }
 

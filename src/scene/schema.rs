@@ -293,6 +293,12 @@ pub struct SolverSpec {
     /// or `"implex"`, see [`IntegrationSpec`] and `docs/implex.md`.
     #[serde(default)]
     pub integration: IntegrationSpec,
+    /// Check every implicit increment that Newton lands in one step while ITZ points pass
+    /// the peak of their law against two half steps, and flag it when they reach another
+    /// equilibrium (the answer depends on the host's step: `RveInfo` and the UMAT then
+    /// ask for a smaller step, `PNEWDT` 0.5). `false` skips the check.
+    #[serde(default = "yes")]
+    pub step_check: bool,
 }
 
 /// `solver.integration`: how the ITZ law's history is integrated over a step.
@@ -340,6 +346,7 @@ impl Default for SolverSpec {
             contact_status: ContactStatusSpec::ActiveSet,
             fast_path: true,
             integration: IntegrationSpec::Implicit,
+            step_check: true,
         }
     }
 }
