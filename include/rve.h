@@ -89,7 +89,10 @@ typedef enum RveReliability {
   // Converged to the scene's tolerance in one step.
   RVE_RELIABILITY_RELIABLE = 1,
   // Converged to the scene's tolerance, but only after bisecting the increment
-  // (`substeps > 1`): the host's increments are large for this material state.
+  // (`substeps > 1`), or to an answer that depends on the increment's size (a step
+  // beyond a snap-back that half steps take, `solver.step_check`; then
+  // `suggested_step_ratio` is 0.5): the host's increments are large for this material
+  // state.
   RVE_RELIABILITY_SUBSTEPPED = 2,
 } RveReliability;
 
@@ -114,7 +117,7 @@ typedef struct RveInfo {
   // An `RveReliability` value.
   int32_t reliability;
   // Suggested ratio of the next macro increment to this one (UMAT's PNEWDT): 1.0 on
-  // success, < 1 after a solver failure.
+  // success, < 1 after a solver failure or for an answer that depends on the step.
   double suggested_step_ratio;
   // Out-of-plane stress `s_zz` (plane strain; 0 in plane stress), stress units.
   double s_zz;

@@ -61,7 +61,10 @@ pub enum RveReliability {
     /// Converged to the scene's tolerance in one step.
     Reliable = 1,
     /// Converged to the scene's tolerance, but only after bisecting the increment
-    /// (`substeps > 1`): the host's increments are large for this material state.
+    /// (`substeps > 1`), or to an answer that depends on the increment's size (a step
+    /// beyond a snap-back that half steps take, `solver.step_check`; then
+    /// `suggested_step_ratio` is 0.5): the host's increments are large for this material
+    /// state.
     Substepped = 2,
 }
 
@@ -78,7 +81,7 @@ pub struct RveInfo {
     /// An `RveReliability` value.
     pub reliability: i32,
     /// Suggested ratio of the next macro increment to this one (UMAT's PNEWDT): 1.0 on
-    /// success, < 1 after a solver failure.
+    /// success, < 1 after a solver failure or for an answer that depends on the step.
     pub suggested_step_ratio: f64,
     /// Out-of-plane stress `s_zz` (plane strain; 0 in plane stress), stress units.
     pub s_zz: f64,
@@ -90,12 +93,12 @@ impl RveInfo {
             iterations: r.report.iterations,
             substeps: r.report.substeps,
             factorizations: r.report.factorizations,
-            reliability: if r.report.substeps > 1 {
+            reliability: if r.report.substeps > 1 || r.report.step_too_large {
                 RveReliability::Substepped as i32
             } else {
                 RveReliability::Reliable as i32
             },
-            suggested_step_ratio: 1.0,
+            suggested_step_ratio: r.report.suggested_step_ratio(),
             s_zz: r.s_zz,
         }
     }

@@ -55,6 +55,9 @@ use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
 use crate::solver::TangentRequest;
 
+/// Printed once per process when an increment's answer depends on its size.
+static STEP_NOTE: std::sync::Once = std::sync::Once::new();
+
 /// `PNEWDT` after a failure other than the solver's (which suggests its own ratio).
 pub const FAILURE_STEP_RATIO: f64 = 0.25;
 
@@ -380,6 +383,20 @@ impl Umat {
         ];
         for (s, m) in out.statev.iter_mut().zip(mirrors) {
             *s = m;
+        }
+        if r.report.step_too_large {
+            *out.pnewdt = out.pnewdt.min(r.report.suggested_step_ratio());
+            STEP_NOTE.call_once(|| {
+                eprintln!(
+                    "mesorve: element {}, point {}: the RVE's answer depends on the size of \
+                     this increment (one step landed beyond a snap-back that half steps \
+                     take; solver.step_check): PNEWDT = {} asks for a smaller step (printed \
+                     once)",
+                    c.noel,
+                    c.npt,
+                    r.report.suggested_step_ratio()
+                )
+            });
         }
         Ok(Outcome {
             solved,

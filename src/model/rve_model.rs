@@ -13,8 +13,8 @@ use crate::homogenization::Homogenizer;
 use crate::mesh::{Mesh, Microstructure};
 use crate::scene::{Scene, MAX_STRAIN};
 use crate::solver::{
-    fast_path, implex, solve_increment, Answer, IncrementReport, Integration, LinearSolver,
-    Problem, Settings, TangentRequest, Workspace,
+    fast_path, implex, solve_increment, step_check, Answer, IncrementReport, Integration,
+    LinearSolver, Problem, Settings, TangentRequest, Workspace,
 };
 use crate::state::State;
 
@@ -158,11 +158,25 @@ impl Model {
         trial: &mut State,
         request: TangentRequest,
     ) -> Result<Response> {
+        self.update_timed(committed, strain, 0.0, ws, trial, request)
+    }
+
+    /// [`Model::update`] over the host's time increment `dt` (0: none), which a
+    /// rate-dependent interface law uses (`materials.itz.viscosity`).
+    pub fn update_timed(
+        &self,
+        committed: &State,
+        strain: [f64; 3],
+        dt: f64,
+        ws: &mut Workspace,
+        trial: &mut State,
+        request: TangentRequest,
+    ) -> Result<Response> {
         if ws.model_id() != self.id {
             return Err(Error::WorkspaceMismatch);
         }
         check_strain(strain)?;
-        let problem = self.problem();
+        let problem = self.problem(dt);
         let solved = solve_increment(&problem, committed, strain, request, ws, trial)?;
         let tangent = match request {
             TangentRequest::Consistent => self.hom.tangent_from_condensed(&solved.condensed),
@@ -191,12 +205,23 @@ impl Model {
         if request == TangentRequest::Consistent {
             fast_path::build(&problem, trial, tangent, s_zz_tangent, ws);
         }
+        let mut report = solved.report;
+        if step_check::applies(
+            &problem,
+            committed,
+            trial,
+            report.substeps,
+            report.limit_points,
+        ) {
+            (report.step_too_large, report.check_factorizations) =
+                step_check::depends_on_step(&problem, committed, strain, trial, ws);
+        }
         Ok(Response {
             stress,
             tangent,
             s_zz,
             s_zz_tangent,
-            report: solved.report,
+            report,
         })
     }
 
@@ -219,7 +244,7 @@ impl Model {
             return Err(Error::WorkspaceMismatch);
         }
         check_strain(strain)?;
-        let problem = self.problem();
+        let problem = self.problem(0.0);
         let mut factorizations = 0;
         if !reuse {
             let ratio = implex::step_ratio(committed.implex.step, dt);
@@ -273,7 +298,7 @@ impl Model {
     ) -> Result<Option<Response>> {
         check_strain(strain)?;
         let linear = &committed.linear;
-        if !fast_path::answers(&self.problem(), &committed.history, linear, &strain) {
+        if !fast_path::answers(&self.problem(0.0), &committed.history, linear, &strain) {
             return Ok(None);
         }
         let (stress, s_zz) = fast_path::response(linear, &strain);
@@ -317,17 +342,18 @@ impl Model {
         }
         let mut ws = self.workspace();
         let mut out = self.new_state();
-        fast_path::materialize(&self.problem(), state, &mut out, &mut ws)?;
+        fast_path::materialize(&self.problem(0.0), state, &mut out, &mut ws)?;
         Ok(Cow::Owned(out))
     }
 
     /// The problem the solver sees.
-    fn problem(&self) -> Problem<'_> {
+    fn problem(&self, dt: f64) -> Problem<'_> {
         Problem {
             disc: &self.disc,
             linear: &self.linear,
             settings: &self.solver,
             predictor: &self.elastic_sensitivity,
+            dt,
         }
     }
 }

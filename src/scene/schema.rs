@@ -189,6 +189,12 @@ pub struct ItzSpec {
     /// [`crate::interface::ContactShear`].
     #[serde(default)]
     pub contact_shear: crate::interface::ContactShear,
+    /// Viscous regularization of the ITZ history (Duvaut-Lions; Abaqus' cohesive
+    /// "viscosity coefficient"): the relaxation time `eta`, in the host's time units
+    /// (`DTIME`, `rve_update_timed`). 0 (default): none, the paper's law. See
+    /// [`crate::interface::ViscousCohesive`] and `docs/implex.md`.
+    #[serde(default)]
+    pub viscosity: f64,
 }
 
 /// Contact penalty, exactly one of:
@@ -293,6 +299,12 @@ pub struct SolverSpec {
     /// or `"implex"`, see [`IntegrationSpec`] and `docs/implex.md`.
     #[serde(default)]
     pub integration: IntegrationSpec,
+    /// Check every implicit increment that Newton lands in one step while ITZ points pass
+    /// the peak of their law against two half steps, and flag it when they reach another
+    /// equilibrium (the answer depends on the host's step: `RveInfo` and the UMAT then
+    /// ask for a smaller step, `PNEWDT` 0.5). `false` skips the check.
+    #[serde(default = "yes")]
+    pub step_check: bool,
 }
 
 /// `solver.integration`: how the ITZ law's history is integrated over a step.
@@ -340,6 +352,7 @@ impl Default for SolverSpec {
             contact_status: ContactStatusSpec::ActiveSet,
             fast_path: true,
             integration: IntegrationSpec::Implicit,
+            step_check: true,
         }
     }
 }

@@ -21,6 +21,7 @@ mod newton;
 mod predictor;
 mod problem;
 mod settings;
+pub mod step_check;
 mod supernodal_solve;
 mod tangent;
 mod workspace;

@@ -28,6 +28,9 @@ pub struct Settings {
     pub fast_path: bool,
     /// How the interface history is integrated over a step (see `implex`).
     pub integration: Integration,
+    /// Check an implicit increment that Newton landed over interface points passing
+    /// their peak against two half steps (see `step_check`).
+    pub step_check: bool,
 }
 
 /// How the interface history is integrated over a host increment.
@@ -96,6 +99,12 @@ pub struct IncrementReport {
     pub held_points: usize,
     /// How the update was answered.
     pub answer: Answer,
+    /// The increment's answer depends on its size: Newton landed it in one step over
+    /// interface points passing their peak, and two half steps reach another equilibrium
+    /// (see `step_check`). The host should cut the increment (UMAT's `PNEWDT` < 1).
+    pub step_too_large: bool,
+    /// Factorizations of that check, not counted in `factorizations`.
+    pub check_factorizations: u32,
 }
 
 /// How an update was answered.
@@ -109,6 +118,18 @@ pub enum Answer {
     FastPath,
     /// The instance's pending trial at the same strain, returned again.
     Repeated,
+}
+
+impl IncrementReport {
+    /// The ratio of the next macro increment to this one that the update suggests (UMAT's
+    /// `PNEWDT`): 1, or 1/2 when the answer depends on the step (`step_too_large`).
+    pub fn suggested_step_ratio(&self) -> f64 {
+        if self.step_too_large {
+            0.5
+        } else {
+            1.0
+        }
+    }
 }
 
 impl Answer {

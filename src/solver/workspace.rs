@@ -230,6 +230,8 @@ pub struct Workspace {
     pub(super) substep_start: State,
     /// A lazy committed state with its unknowns formed (see `fast_path::materialize`).
     pub(super) materialized: State,
+    /// The two half steps of a step check (see `step_check`).
+    pub(super) half_steps: [State; 2],
     pub(super) trace: TraceBuffers,
     pub(super) contact: ContactBuffers,
     /// Relative residual norms of the last Newton loop, and the interface branch signature
@@ -267,6 +269,7 @@ impl Workspace {
             history_start: vec![0.0; nh],
             substep_start: State::with_capacity(n, nh),
             materialized: State::with_capacity(n, nh),
+            half_steps: [State::with_capacity(n, nh), State::with_capacity(n, nh)],
             trace: TraceBuffers {
                 f: zeros(),
                 dxf: zeros(),
