@@ -1,10 +1,35 @@
 //! The C driver (c_examples/rve_driver.c, built by scripts/build-c-examples) and `rve run`
 //! follow the paper's section 5.2.2 cycle; every shared value must agree to the last bit.
+//! c_examples/implex_time.c's IMPL-EX path with non-uniform time increments through
+//! `rve_update_timed` equals `Instance::update_timed` to the last bit.
 
 mod common;
 
 use std::path::Path;
 use std::process::Command;
+use std::sync::{Arc, Once};
+
+use rve::solver::TangentRequest;
+use rve::{Instance, Model};
+
+/// Builds the shared library from these sources and the C examples against it, once per
+/// test binary (`cargo test` builds the rlib, not the cdylib the examples link: the
+/// examples must never run a stale copy).
+fn build_examples() {
+    static BUILT: Once = Once::new();
+    BUILT.call_once(|| {
+        let st = Command::new(env!("CARGO"))
+            .args(["build", "--release", "--lib", "--quiet"])
+            .current_dir(common::repo(""))
+            .status()
+            .unwrap();
+        assert!(st.success(), "cargo build --release --lib failed");
+        let st = Command::new(common::repo("scripts/build-c-examples"))
+            .status()
+            .unwrap();
+        assert!(st.success(), "scripts/build-c-examples failed");
+    });
+}
 
 fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -69,20 +94,55 @@ fn compare(scene: Option<&Path>, tag: &str) -> usize {
 
 #[test]
 fn c_driver_is_bit_identical_to_rve_run_on_the_cycle_and_the_embedded_scene() {
-    // `cargo test` builds the rlib, not the cdylib the driver links: build the shared
-    // library from the same sources and stage it, so the driver never runs a stale copy.
-    let st = Command::new(env!("CARGO"))
-        .args(["build", "--release", "--lib", "--quiet"])
-        .current_dir(common::repo(""))
-        .status()
-        .unwrap();
-    assert!(st.success(), "cargo build --release --lib failed");
-    let st = Command::new(common::repo("scripts/build-c-examples"))
-        .status()
-        .unwrap();
-    assert!(st.success(), "scripts/build-c-examples failed");
+    build_examples();
     let cycle = common::repo("scenes/paper_rve_cycle.toml");
     assert_eq!(compare(Some(&cycle), "cycle"), 60);
     // rve_init(NULL): the embedded scene, the one `rve run` solves without an argument.
     assert_eq!(compare(None, "embedded"), 20);
+}
+
+#[test]
+fn implex_time_through_c_is_bit_identical_to_instance_update_timed() {
+    build_examples();
+    let scene = common::repo("scenes/paper_rve_host_implex.toml");
+    let csv = std::env::temp_dir().join(format!("mesorve-implex-time-{}.csv", std::process::id()));
+    // The program's own checks (scaled times, unit times against none, the path's times
+    // against none) must pass too.
+    let st = Command::new(common::repo("target/c_examples/bin/implex_time"))
+        .arg(&scene)
+        .arg(&csv)
+        .status()
+        .unwrap();
+    assert!(st.success(), "implex_time failed");
+    let (header, rows) = read_csv(&csv);
+    std::fs::remove_file(&csv).ok();
+    assert_eq!(header[2], "dtime");
+    assert_eq!(rows.len(), 64);
+    let model =
+        Arc::new(Model::from_scene(&common::scene("scenes/paper_rve_host_implex.toml")).unwrap());
+    let mut instance = Instance::new(model.clone());
+    let mut ws = model.workspace();
+    for (k, row) in rows.iter().enumerate() {
+        let eps = [row[3], row[4], row[5]];
+        let r = instance
+            .update_timed(eps, row[2], &mut ws, TangentRequest::Consistent)
+            .unwrap();
+        instance.commit().unwrap();
+        let rust = r.stress.iter().chain(&r.tangent);
+        for (j, (a, b)) in rust.zip(&row[6..18]).enumerate() {
+            assert_eq!(
+                a.to_bits(),
+                b.to_bits(),
+                "increment {}, column {}: Instance::update_timed {a:e}, C {b:e}",
+                k + 1,
+                header[6 + j]
+            );
+        }
+        assert_eq!(
+            r.report.factorizations as f64,
+            row[20],
+            "increment {}",
+            k + 1
+        );
+    }
 }
