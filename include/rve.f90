@@ -58,7 +58,7 @@ module rve
   ! whose rve_abi_version() differs from RVE_MODULE_ABI_VERSION.
   character(len=*), parameter, public :: RVE_MODULE_VERSION = "0.3.0"
   integer(c_int32_t), parameter, public :: RVE_VERSION_MAJOR = 0
-  integer(c_int32_t), parameter, public :: RVE_VERSION_MINOR = 2
+  integer(c_int32_t), parameter, public :: RVE_VERSION_MINOR = 3
   integer(c_int32_t), parameter, public :: RVE_VERSION_PATCH = 0
   integer(c_int32_t), parameter, public :: RVE_MODULE_ABI_VERSION = 0
 

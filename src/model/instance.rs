@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use super::rve_model::{Model, Response};
 use crate::error::{Error, Result};
-use crate::solver::{Answer, Integration, TangentRequest, Workspace};
+use crate::solver::{implex, Answer, Integration, TangentRequest, Workspace};
 use crate::state::persist::{self, StateSizes};
 use crate::state::State;
 
@@ -179,9 +179,15 @@ impl Instance {
         request: TangentRequest,
     ) -> Result<Response> {
         let model = &self.model;
-        let ratio = crate::solver::implex::step_ratio(self.committed.implex.step, dt).to_bits();
+        let ratio = implex::step_ratio(self.committed.implex.step, dt).to_bits();
         let reuse = model.solver.fast_path && self.implex_step == Some(ratio);
+        let carry = !reuse && model.solver.fast_path && implex::carries_over(&self.committed);
         let trial = self.trial.get_or_insert_with(|| model.new_state());
+        if carry {
+            trial.linear.copy_from(&self.committed.linear);
+            trial.unknowns.copy_from_slice(&self.committed.unknowns);
+        }
+        let reuse = reuse || carry;
         self.implex_step = None;
         let mut response = model.implex_update(&self.committed, strain, dt, ws, trial, reuse)?;
         self.implex_step = Some(ratio);

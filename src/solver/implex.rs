@@ -43,6 +43,24 @@ use crate::error::{Error, Result};
 use crate::interface::{Implex, TangentKind};
 use crate::state::{held_contact_words, LinearBranch, State, JUMP_OPERATOR_LEN};
 
+/// Whether the step kept in `committed.linear` (the step that led to `committed`) is the
+/// next step's too: it froze the history it started from, no point has advanced since
+/// (`h_n = h_{n-1}`, so nothing is extrapolated either) and the contact status is the one
+/// it held. The matrix `K_ex` is then the same, bit for bit, and so is every kept value:
+/// an unloading or closed RVE steps without factorizing.
+pub fn carries_over(committed: &State) -> bool {
+    let implex = &committed.implex;
+    let linear = &committed.linear;
+    linear.valid
+        && implex.at_start
+        && implex.previous == committed.history
+        && linear
+            .closed
+            .iter()
+            .enumerate()
+            .all(|(q, &closed)| closed == implex.is_closed(q))
+}
+
 /// `dt_{n+1} / dt_n` when both time increments are given (positive and finite), else 1.
 pub fn step_ratio(previous: f64, dt: f64) -> f64 {
     let given = |t: f64| t.is_finite() && t > 0.0;
@@ -148,6 +166,8 @@ pub fn finish_step(
     trial.history.copy_from_slice(&committed.history);
     trial.implex.previous.clone_from(&committed.history);
     trial.implex.step = if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
+    trial.implex.at_start =
+        committed.implex.previous.is_empty() || committed.implex.previous == committed.history;
     let mut report = IncrementReport {
         factorizations: 0,
         substeps: 1,

@@ -50,6 +50,10 @@ pub struct ImplexHistory {
     /// The contact status of every interface point at this state (closed), one bit per
     /// point as in [`State::held_contact`].
     pub closed: Vec<u64>,
+    /// The step that led here froze the history it started from (nothing to extrapolate):
+    /// its kept data ([`State::linear`]) is then the matrix of a next step that starts
+    /// from an unchanged history and contact status (`solver::implex::carries_over`).
+    pub at_start: bool,
 }
 
 impl ImplexHistory {
@@ -64,6 +68,7 @@ impl ImplexHistory {
         self.previous.clone_from(&other.previous);
         self.step = other.step;
         self.closed.clone_from(&other.closed);
+        self.at_start = other.at_start;
     }
 
     /// Whether the buffers fit `n_history` history values and `points` points (or are

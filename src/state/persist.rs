@@ -448,8 +448,8 @@ mod tests {
     }
 
     /// Bytes of an empty [`ImplexHistory`](crate::state::ImplexHistory): two empty
-    /// vectors' lengths and the step.
-    const EMPTY_IMPLEX: usize = 24;
+    /// vectors' lengths, the step and the flag.
+    const EMPTY_IMPLEX: usize = 25;
 
     /// `bytes` (current format) rewritten as format `version` by dropping the payload's
     /// last `strip` bytes, with a new header and checksum.
