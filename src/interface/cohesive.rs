@@ -353,11 +353,11 @@ impl CohesiveLaw {
         if opening >= history.delta_max {
             // Loading, eqs. 23, 32-33, tangent eq. 45.
             let k = self.loading_secant(opening);
-            let (us, un) = if opening > 0.0 {
-                (bs / opening, dn / opening)
-            } else {
-                (0.0, 0.0)
-            };
+            // At `opening == 0` both components are 0: dividing by 1 gives the (0, 0)
+            // direction without forming 0/0, which a host trapping invalid operations
+            // (a debug Fortran build) would stop on even where the value is unused.
+            let denominator = if opening > 0.0 { opening } else { 1.0 };
+            let (us, un) = (bs / denominator, dn / denominator);
             let inv_dc = 1.0 / self.delta_c;
             let css = k * beta * beta * (1.0 - bs * us * inv_dc);
             let csn = -k * beta * bs * un * inv_dc;

@@ -72,7 +72,7 @@ impl ViscousCohesive {
         if loading && opening > 0.0 {
             let share = if a.is_finite() { a / (1.0 + a) } else { 1.0 };
             let slope = -k / self.law.delta_c;
-            let c = share * slope / opening;
+            let c = share * slope / opening.max(f64::MIN_POSITIVE);
             let off = c * b_delta.x * b_delta.y;
             tangent += Matrix2::new(
                 c * b_delta.x * b_delta.x,
