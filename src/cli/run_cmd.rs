@@ -133,17 +133,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .unwrap_or_else(|_| ProgressStyle::default_bar());
         ProgressBar::new(n_steps as u64).with_style(style)
     });
-    let mut previous = [0.0; 3];
+    let times = step_times(&points);
     for (step, eps) in points.into_iter().enumerate() {
         let t0 = Instant::now();
-        // The time increment of a path step: the norm of its strain increment (used by
-        // IMPL-EX only, see `solver::implex`).
-        let dt = (0..3)
-            .map(|c| (eps[c] - previous[c]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        previous = eps;
-        let r = instance.update_timed(eps, dt, &mut ws, TangentRequest::Consistent)?;
+        let r = instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
         let seconds = t0.elapsed().as_secs_f64();
         instance.commit()?;
         let d = r.tangent;
@@ -266,4 +259,21 @@ fn write_with(
     let mut w = BufWriter::new(File::create(path).map_err(io_err)?);
     f(&mut w).map_err(io_err)?;
     w.flush().map_err(io_err)
+}
+
+/// The time increment of each path step: the norm of its strain increment (what a
+/// rate-dependent or IMPL-EX law sees, see `solver::implex`).
+fn step_times(points: &[[f64; 3]]) -> Vec<f64> {
+    let mut previous = [0.0; 3];
+    points
+        .iter()
+        .map(|eps| {
+            let dt = (0..3)
+                .map(|c| (eps[c] - previous[c]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            previous = *eps;
+            dt
+        })
+        .collect()
 }

@@ -241,6 +241,24 @@ struct Failed {
     material: Option<Arc<Material>>,
 }
 
+/// `PNEWDT` < 1 when the answer depends on the increment's size (`solver.step_check`),
+/// said once per process on stderr.
+fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
+    if !r.report.step_too_large {
+        return;
+    }
+    let ratio = r.report.suggested_step_ratio();
+    *out.pnewdt = out.pnewdt.min(ratio);
+    STEP_NOTE.call_once(|| {
+        eprintln!(
+            "mesorve: element {}, point {}: the RVE's answer depends on the size of this \
+             increment (one step landed beyond a snap-back that half steps take; \
+             solver.step_check): PNEWDT = {ratio} asks for a smaller step (printed once)",
+            c.noel, c.npt
+        )
+    });
+}
+
 /// The table of a host's integration points.
 pub struct Umat {
     search: SearchPath,
@@ -384,20 +402,7 @@ impl Umat {
         for (s, m) in out.statev.iter_mut().zip(mirrors) {
             *s = m;
         }
-        if r.report.step_too_large {
-            *out.pnewdt = out.pnewdt.min(r.report.suggested_step_ratio());
-            STEP_NOTE.call_once(|| {
-                eprintln!(
-                    "mesorve: element {}, point {}: the RVE's answer depends on the size of \
-                     this increment (one step landed beyond a snap-back that half steps \
-                     take; solver.step_check): PNEWDT = {} asks for a smaller step (printed \
-                     once)",
-                    c.noel,
-                    c.npt,
-                    r.report.suggested_step_ratio()
-                )
-            });
-        }
+        ask_for_smaller_step(c, &r, out);
         Ok(Outcome {
             solved,
             committed,
