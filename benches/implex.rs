@@ -42,7 +42,10 @@ fn follow(model: &Arc<Model>, points: &[[f64; 3]]) -> Row {
         factorizations = 0;
         for &eps in points {
             let near = std::array::from_fn(|c| previous[c] + 0.99 * (eps[c] - previous[c]));
-            let dt = (0..3).map(|c| (eps[c] - previous[c]).powi(2)).sum::<f64>().sqrt();
+            let dt = (0..3)
+                .map(|c| (eps[c] - previous[c]).powi(2))
+                .sum::<f64>()
+                .sqrt();
             let t0 = Instant::now();
             let a = instance.update_timed(near, dt, &mut ws, TangentRequest::Consistent);
             let t1 = Instant::now();
