@@ -25,6 +25,29 @@
       below ZERO_FORCE times the peak force, and the compression's secant slope (F/U from
       U = 0 to the end) exceeds the unloading's (from its start to U = 0).
 
+  calculix_report.py curves LABEL=JOB ...
+      The tension (time <= 1) of several runs of one specimen (step sizes, meshes): peak,
+      lowest force after it, the dissipated energy, and the force at every displacement
+      of the first run (the others' increments must include them), as Markdown.
+
+  calculix_report.py ligament LABEL=JOB ...
+      The notched strip's mean strains eps_yy at its first peak and at the lowest force
+      after it: the ligament's middle half (between LIGLOW and LIGTOP, 20 <= x <= 60) and
+      the parts below and above the notches at the same x, as Markdown.
+
+  calculix_report.py rvetime LABEL=JOB ...
+      The RVE time of runs made with the timing UMAT (calculix_examples/umat_timing.c,
+      JOB.times.csv): calls, RVE seconds in all and per converged increment, as Markdown;
+      and the same up to the last converged time of the shortest run.
+
+  calculix_report.py hostits LABEL=JOB ...
+      ccx's Newton iterations per converged increment (median, max), increments and
+      attempts cut back of each run, as Markdown.
+
+  calculix_report.py factorizations LABEL=JOB:COUNT ...
+      COUNT numeric factorizations (counted under gdb) per RVE per converged increment,
+      the RVEs being the points of the timing UMAT's JOB.times.csv, as Markdown.
+
   calculix_report.py band JOB
       The localization of specimen_band.inp: the force's peak in the tension (time <= 2)
       and its lowest value after it, and the mean strains of the band (between the node
@@ -243,6 +266,115 @@ def cycle(job):
         sys.exit(f"cycle {job}: " + "; ".join(failed))
 
 
+def dissipated(tension):
+    """Work of the force along the tension less the energy a secant unloading to the
+    origin gives back (N mm)."""
+    work = sum(0.5 * (f0 + f1) * (u1 - u0)
+               for (_, u0, f0), (_, u1, f1) in zip([(0, 0.0, 0.0)] + tension, tension))
+    return work - 0.5 * tension[-1][1] * tension[-1][2]
+
+
+def curves(runs):
+    tensions = [(label, phases(curve(job))[0]) for label, job in runs]
+    print("| run | increments | first peak F (N) | U at peak (mm) | lowest after it (N) | "
+          "fall | dissipated (N mm) |")
+    print("|---|---|---|---|---|---|---|")
+    for label, t in tensions:
+        peak = t[first_peak(t)]
+        low = min(t[first_peak(t):], key=lambda p: p[2])
+        print(f"| {label} | {len(t)} | {peak[2]:.2f} | {peak[1]:.4e} | {low[2]:.2f} | "
+              f"{100 * (1 - low[2] / peak[2]):.1f} % | {dissipated(t):.4e} |")
+    print("\n| U (mm) | " + " | ".join(label for label, _ in tensions) + " |")
+    print("|---|" + "---|" * len(tensions))
+    for _, u, _ in tensions[0][1]:
+        forces = [next((f"{p[2]:.2f}" for p in t if abs(p[1] - u) < 1e-9), "") for _, t in tensions]
+        print(f"| {u:.4e} | " + " | ".join(forces) + " |")
+
+
+def middle(rows):
+    """The mean uy (column 2) of the middle half of a node set's rows (x order)."""
+    n = len(rows)
+    part = rows[n // 4:n - n // 4]
+    return sum(r[2] for r in part) / len(part)
+
+
+def ligament(runs):
+    print("| run | point | U (mm) | F (N) | ligament | below | above |")
+    print("|---|---|---|---|---|---|---|")
+    for label, job in runs:
+        low = dat_blocks(job + ".dat", "displacements", "LIGLOW")
+        top = dat_blocks(job + ".dat", "displacements", "LIGTOP")
+        tension = phases(curve(job))[0]
+        k = first_peak(tension)
+        points = [("peak", tension[k]), ("lowest after", min(tension[k:], key=lambda p: p[2]))]
+        for name, (t, u, f) in points:
+            a, b = middle(low[t]), middle(top[t])
+            print(f"| {label} | {name} | {u:.4e} | {f:.2f} | {(b - a) / 10:.3e} | "
+                  f"{a / 20:.3e} | {(u - b) / 20:.3e} |")
+
+def umat_times(job):
+    """{(kstep, kinc, start time): [calls, seconds]} of the timing UMAT's JOB.times.csv
+    (every attempt of an increment under its key)."""
+    out = {}
+    with open(job + ".times.csv") as f:
+        for line in f:
+            v = line.split(",")
+            key = (int(v[0]), int(v[1]), round(float(v[2]), 9))
+            entry = out.setdefault(key, [0, 0.0])
+            entry[0] += 1
+            entry[1] += float(v[6])
+    return out
+
+
+def rvetime_row(label, job, until=None):
+    """Prints the RVE time of the converged increments up to time `until` (default: all
+    of them, with every call of the run); returns the time of the last converged one."""
+    times = umat_times(job)
+    c = [p for p in curve(job) if until is None or p[0] <= until + 1e-9]
+    keys = [k for k in times if until is None or k[2] < until - 1e-9]
+    calls = sum(times[k][0] for k in keys)
+    seconds = sum(times[k][1] for k in keys)
+    print(f"| {label} | {len(c)} (to U = {c[-1][1]:.4e} mm) | {calls} | {seconds:.2f} | "
+          f"{1e3 * seconds / len(c):.1f} | {1e6 * seconds / calls:.0f} |")
+    return c[-1][0]
+
+
+def rvetime(runs):
+    head = ("| run | converged increments | UMAT calls | RVE time (s) | RVE time per "
+            "converged increment (ms) | per call (µs) |\n|---|---|---|---|---|---|")
+    print(head)
+    until = min(rvetime_row(label, job) for label, job in runs)
+    print(f"\nUp to time {until:g} (the shortest run's last converged increment):\n")
+    print(head)
+    for label, job in runs:
+        rvetime_row(label, job, until)
+
+def hostits(runs):
+    print("| run | converged increments | attempts cut back | ccx iterations per increment "
+          "(median / max) | finished |")
+    print("|---|---|---|---|---|")
+    for label, job in runs:
+        rows = sta(job)
+        its = sorted(r[4] for r in rows if r[3])
+        with open(job + ".log") as f:
+            finished = "yes" if "Job finished" in f.read() else "no"
+        print(f"| {label} | {len(its)} | {sum(not r[3] for r in rows)} | "
+              f"{its[len(its) // 2]} / {its[-1]} | {finished} |")
+
+
+def factorizations(runs):
+    print("| run | RVEs | converged increments | attempts cut back | factorizations | "
+          "per RVE per converged increment |")
+    print("|---|---|---|---|---|---|")
+    for label, arg in runs:
+        job, count = arg.rsplit(":", 1)
+        with open(job + ".times.csv") as f:
+            points = len({tuple(line.split(",")[4:6]) for line in f})
+        rows = sta(job)
+        n = sum(r[3] for r in rows)
+        print(f"| {label} | {points} | {n} | {sum(not r[3] for r in rows)} | {count} | "
+              f"{int(count) / (points * n):.4f} |")
+
 def converged(job, step):
     """The `sta` rows of the converged increments of step `step`."""
     return [r for r in sta(job) if r[0] == step and r[3]]
@@ -277,6 +409,10 @@ if __name__ == "__main__":
         iterations(int(sys.argv[2]), [tuple(a.split("=", 1)) for a in sys.argv[3:]])
     elif sys.argv[1] == "cycle":
         cycle(sys.argv[2])
+    elif sys.argv[1] in ("curves", "ligament", "rvetime", "hostits", "factorizations"):
+        runs = [tuple(a.split("=", 1)) for a in sys.argv[2:]]
+        {"curves": curves, "ligament": ligament, "rvetime": rvetime, "hostits": hostits,
+         "factorizations": factorizations}[sys.argv[1]](runs)
     elif sys.argv[1] == "band":
         band(sys.argv[2])
     else:
