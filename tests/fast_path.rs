@@ -54,7 +54,6 @@ fn residual_with_gaps(model: &Model, x: &[f64], eps: &[f64; 3], history: &[f64])
         linear: &model.linear,
         settings: &model.solver,
         predictor: &model.elastic_sensitivity,
-        dt: 0.0,
     };
     let mut trial = history.to_vec();
     let mut r = vec![0.0; x.len()];

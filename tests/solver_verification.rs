@@ -1325,7 +1325,6 @@ fn perfect_bonding_is_answered_without_a_factorization() {
                 linear: &model.linear,
                 settings: &model.solver,
                 predictor: &[],
-                dt: 0.0,
             };
             let mut trial = model.new_state();
             let solved = solve_increment(

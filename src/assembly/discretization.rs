@@ -280,25 +280,6 @@ impl Discretization {
         kind: TangentKind,
         status: Option<&[bool]>,
     ) -> SystemEvaluation {
-        self.evaluate_with_law(None, x, eps, committed, trial, r, k, kind, status)
-    }
-
-    /// [`Discretization::evaluate_with`] with the interface law `law` in place of the
-    /// model's (`None`: the model's), e.g. the model's law over a time increment
-    /// ([`crate::interface::Timed`]); it must have the model's history layout.
-    #[allow(clippy::too_many_arguments)]
-    pub fn evaluate_with_law(
-        &self,
-        law: Option<&dyn InterfaceLaw>,
-        x: &[f64],
-        eps: &[f64; 3],
-        committed: &[f64],
-        trial: &mut [f64],
-        r: &mut [f64],
-        k: Option<&mut [f64]>,
-        kind: TangentKind,
-        status: Option<&[bool]>,
-    ) -> SystemEvaluation {
         // Linear part: K_const x + G eps.
         self.pattern.mul_symmetric(&self.k_const, x, r);
         let n = self.n();
@@ -317,7 +298,7 @@ impl Discretization {
             branch_signature: FNV_OFFSET,
             ..Default::default()
         };
-        let Some(law) = law.or(self.law.as_deref()) else {
+        let Some(law) = self.law.as_deref() else {
             return counts;
         };
         let per_element = self.history_per_interface();

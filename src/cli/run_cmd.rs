@@ -261,8 +261,8 @@ fn write_with(
     w.flush().map_err(io_err)
 }
 
-/// The time increment of each path step: the norm of its strain increment (what a
-/// rate-dependent or IMPL-EX law sees, see `solver::implex`).
+/// The time increment of each path step: the norm of its strain increment (what IMPL-EX
+/// scales its extrapolation by, see `solver::implex`).
 fn step_times(points: &[[f64; 3]]) -> Vec<f64> {
     let mut previous = [0.0; 3];
     points

@@ -101,29 +101,6 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         self.respond(committed, trial, jump, length, kind)
     }
 
-    /// [`InterfaceLaw::respond_as`] over a time increment `dt` (0: none given), for a law
-    /// whose response depends on time ([`InterfaceLaw::uses_time`]); the default ignores
-    /// `dt`.
-    #[allow(clippy::too_many_arguments)]
-    fn respond_timed(
-        &self,
-        committed: &[f64],
-        trial: &mut [f64],
-        jump: [f64; 2],
-        length: f64,
-        kind: TangentKind,
-        closed: bool,
-        _dt: f64,
-    ) -> LawPoint {
-        self.respond_as(committed, trial, jump, length, kind, closed)
-    }
-
-    /// Whether the response depends on the time increment (a rate-dependent law): the
-    /// solver then evaluates it through [`Timed`].
-    fn uses_time(&self) -> bool {
-        false
-    }
-
     /// Whether a point whose history goes from `start` to `trial` within a step passes
     /// the peak of its strength there: the solver then refuses the tangent predictor,
     /// which would carry it past a limit point of the RVE on the pre-peak branch.
@@ -181,69 +158,5 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
     /// `closed_points` points in contact, if the law knows why that may fail.
     fn failure_hint(&self, _closed_points: usize) -> Option<String> {
         None
-    }
-}
-
-/// A law evaluated over the time increment `dt` of the current update: every response is
-/// [`InterfaceLaw::respond_timed`]; everything else is the law's own.
-#[derive(Debug)]
-pub struct Timed<'a> {
-    pub law: &'a dyn InterfaceLaw,
-    pub dt: f64,
-}
-
-impl InterfaceLaw for Timed<'_> {
-    fn history_len(&self) -> usize {
-        self.law.history_len()
-    }
-
-    fn respond(
-        &self,
-        committed: &[f64],
-        trial: &mut [f64],
-        jump: [f64; 2],
-        length: f64,
-        kind: TangentKind,
-    ) -> LawPoint {
-        let closed = self.law.is_closed(jump);
-        self.law
-            .respond_timed(committed, trial, jump, length, kind, closed, self.dt)
-    }
-
-    fn respond_as(
-        &self,
-        committed: &[f64],
-        trial: &mut [f64],
-        jump: [f64; 2],
-        length: f64,
-        kind: TangentKind,
-        closed: bool,
-    ) -> LawPoint {
-        self.law
-            .respond_timed(committed, trial, jump, length, kind, closed, self.dt)
-    }
-
-    fn has_contact_status(&self) -> bool {
-        self.law.has_contact_status()
-    }
-
-    fn is_closed(&self, jump: [f64; 2]) -> bool {
-        self.law.is_closed(jump)
-    }
-
-    fn passes_peak(&self, start: &[f64], trial: &[f64]) -> bool {
-        self.law.passes_peak(start, trial)
-    }
-
-    fn stays_linear(&self, history: &[f64], jump: [f64; 2], error: [f64; 2], closed: bool) -> bool {
-        self.law.stays_linear(history, jump, error, closed)
-    }
-
-    fn history_is_valid(&self, history: &[f64]) -> bool {
-        self.law.history_is_valid(history)
-    }
-
-    fn failure_hint(&self, closed_points: usize) -> Option<String> {
-        self.law.failure_hint(closed_points)
     }
 }

@@ -5,10 +5,8 @@ mod cohesive;
 mod implex;
 mod law;
 mod linear;
-mod viscous;
 
 pub use cohesive::{CohesiveHistory, CohesiveLaw, CohesivePoint, ContactShear, Penalty};
 pub use implex::Implex;
-pub use law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind, Timed};
+pub use law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
 pub use linear::LinearInterface;
-pub use viscous::ViscousCohesive;

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use crate::constraint::BoundaryCondition;
-use crate::interface::{CohesiveLaw, InterfaceLaw, LinearInterface, Penalty, ViscousCohesive};
+use crate::interface::{CohesiveLaw, InterfaceLaw, LinearInterface, Penalty};
 use crate::scene::{
     BoundaryKind, ContactStatusSpec, IntegrationSpec, ItzSpec, SceneSpec, SolverSpec,
 };
@@ -59,7 +59,7 @@ pub fn interface_law(spec: &SceneSpec) -> Option<Arc<dyn InterfaceLaw>> {
         }));
     }
     let itz: &ItzSpec = materials.itz.as_ref()?;
-    let law = CohesiveLaw {
+    Some(Arc::new(CohesiveLaw {
         sigma_c: itz.sigma_c,
         delta_c: itz.delta_c,
         beta: itz.beta,
@@ -70,12 +70,5 @@ pub fn interface_law(spec: &SceneSpec) -> Option<Arc<dyn InterfaceLaw>> {
         },
         contact: spec.effects.contact,
         contact_shear: itz.contact_shear,
-    };
-    if itz.viscosity > 0.0 {
-        return Some(Arc::new(ViscousCohesive {
-            law,
-            viscosity: itz.viscosity,
-        }));
-    }
-    Some(Arc::new(law))
+    }))
 }

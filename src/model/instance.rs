@@ -133,7 +133,7 @@ impl Instance {
         let response = if self.model.solver.integration == Integration::Implex {
             self.implex(strain, dt, ws, request)?
         } else {
-            self.implicit(strain, dt, ws, request)?
+            self.implicit(strain, ws, request)?
         };
         self.last = Some(LastTrial {
             strain,
@@ -148,7 +148,6 @@ impl Instance {
     fn implicit(
         &mut self,
         strain: [f64; 3],
-        dt: f64,
         ws: &mut Workspace,
         request: TangentRequest,
     ) -> Result<Response> {
@@ -161,8 +160,7 @@ impl Instance {
             }
             None => {
                 let trial = self.trial.get_or_insert_with(|| model.new_state());
-                let response =
-                    model.update_timed(&self.committed, strain, dt, ws, trial, request)?;
+                let response = model.update(&self.committed, strain, ws, trial, request)?;
                 self.pending = Pending::Solved;
                 response
             }

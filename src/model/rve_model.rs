@@ -158,25 +158,11 @@ impl Model {
         trial: &mut State,
         request: TangentRequest,
     ) -> Result<Response> {
-        self.update_timed(committed, strain, 0.0, ws, trial, request)
-    }
-
-    /// [`Model::update`] over the host's time increment `dt` (0: none), which a
-    /// rate-dependent interface law uses (`materials.itz.viscosity`).
-    pub fn update_timed(
-        &self,
-        committed: &State,
-        strain: [f64; 3],
-        dt: f64,
-        ws: &mut Workspace,
-        trial: &mut State,
-        request: TangentRequest,
-    ) -> Result<Response> {
         if ws.model_id() != self.id {
             return Err(Error::WorkspaceMismatch);
         }
         check_strain(strain)?;
-        let problem = self.problem(dt);
+        let problem = self.problem();
         let solved = solve_increment(&problem, committed, strain, request, ws, trial)?;
         let tangent = match request {
             TangentRequest::Consistent => self.hom.tangent_from_condensed(&solved.condensed),
@@ -244,7 +230,7 @@ impl Model {
             return Err(Error::WorkspaceMismatch);
         }
         check_strain(strain)?;
-        let problem = self.problem(0.0);
+        let problem = self.problem();
         let mut factorizations = 0;
         if !reuse {
             let ratio = implex::step_ratio(committed.implex.step, dt);
@@ -298,7 +284,7 @@ impl Model {
     ) -> Result<Option<Response>> {
         check_strain(strain)?;
         let linear = &committed.linear;
-        if !fast_path::answers(&self.problem(0.0), &committed.history, linear, &strain) {
+        if !fast_path::answers(&self.problem(), &committed.history, linear, &strain) {
             return Ok(None);
         }
         let (stress, s_zz) = fast_path::response(linear, &strain);
@@ -342,18 +328,17 @@ impl Model {
         }
         let mut ws = self.workspace();
         let mut out = self.new_state();
-        fast_path::materialize(&self.problem(0.0), state, &mut out, &mut ws)?;
+        fast_path::materialize(&self.problem(), state, &mut out, &mut ws)?;
         Ok(Cow::Owned(out))
     }
 
     /// The problem the solver sees.
-    fn problem(&self, dt: f64) -> Problem<'_> {
+    fn problem(&self) -> Problem<'_> {
         Problem {
             disc: &self.disc,
             linear: &self.linear,
             settings: &self.solver,
             predictor: &self.elastic_sensitivity,
-            dt,
         }
     }
 }

@@ -189,12 +189,6 @@ pub struct ItzSpec {
     /// [`crate::interface::ContactShear`].
     #[serde(default)]
     pub contact_shear: crate::interface::ContactShear,
-    /// Viscous regularization of the ITZ history (Duvaut-Lions; Abaqus' cohesive
-    /// "viscosity coefficient"): the relaxation time `eta`, in the host's time units
-    /// (`DTIME`, `rve_update_timed`). 0 (default): none, the paper's law. See
-    /// [`crate::interface::ViscousCohesive`] and `docs/implex.md`.
-    #[serde(default)]
-    pub viscosity: f64,
 }
 
 /// Contact penalty, exactly one of:

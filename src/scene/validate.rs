@@ -157,7 +157,7 @@ impl SceneSpec {
             ));
         }
         if let Some(itz) = &materials.itz {
-            validate_itz(itz, self.solver.integration)?;
+            validate_itz(itz)?;
         }
         if let Some(linear) = &materials.linear_itz {
             positive(
@@ -233,18 +233,10 @@ impl SceneSpec {
     }
 }
 
-fn validate_itz(itz: &ItzSpec, integration: IntegrationSpec) -> Result<()> {
+fn validate_itz(itz: &ItzSpec) -> Result<()> {
     positive("materials.itz.sigma_c", itz.sigma_c)?;
     positive("materials.itz.delta_c", itz.delta_c)?;
     positive("materials.itz.beta", itz.beta)?;
-    non_negative("materials.itz.viscosity", itz.viscosity)?;
-    if itz.viscosity > 0.0 && integration == IntegrationSpec::Implex {
-        return Err(Error::scene(
-            "materials.itz.viscosity",
-            "is a remedy of the implicit scheme; with solver.integration = \"implex\" set \
-             it to 0 (the two are alternatives, docs/implex.md)",
-        ));
-    }
     match (itz.penalty.lambda_p, itz.penalty.stiffness) {
         (Some(l), None) => positive("materials.itz.penalty.lambda_p", l),
         (None, Some(k)) => positive("materials.itz.penalty.stiffness", k),

@@ -13,7 +13,7 @@ use super::linear::{FactorKind, LinearSolver};
 use super::settings::Settings;
 use super::workspace::{Evaluation, Workspace};
 use crate::assembly::Discretization;
-use crate::interface::{InterfaceLaw, TangentKind, Timed};
+use crate::interface::TangentKind;
 
 /// A macro strain `[eps_xx, eps_yy, gamma_xy]` (engineering shear).
 pub type Strain = [f64; 3];
@@ -27,9 +27,6 @@ pub struct Problem<'a> {
     /// Elastic sensitivity `-K_el^-1 G` (n x 3, column-major), or empty: the fallback
     /// predictor `x_0 = x_n + X_el Delta eps` of a step (see `predictor`).
     pub predictor: &'a [f64],
-    /// The host's time increment of the update (0: none), for a rate-dependent interface
-    /// law ([`crate::interface::InterfaceLaw::uses_time`]).
-    pub dt: f64,
 }
 
 impl Problem<'_> {
@@ -65,10 +62,7 @@ impl Problem<'_> {
         kind: TangentKind,
         out: &mut Evaluation,
     ) {
-        let law = self.disc.law.as_deref().filter(|l| l.uses_time());
-        let timed = law.map(|law| Timed { law, dt: self.dt });
-        out.counts = self.disc.evaluate_with_law(
-            timed.as_ref().map(|t| t as &dyn InterfaceLaw),
+        out.counts = self.disc.evaluate_with(
             x,
             strain,
             start,

@@ -56,11 +56,6 @@ pub fn depends_on_step(
     );
     let middle = std::array::from_fn(|c| 0.5 * (committed.strain[c] + strain[c]));
     let request = TangentRequest::None;
-    // Each half step takes half the time (a rate-dependent law sees it).
-    let problem = &Problem {
-        dt: 0.5 * problem.dt,
-        ..*problem
-    };
     let mut factorizations = 0;
     let mut other = false;
     if let Ok(a) = solve_increment(problem, committed, middle, request, ws, &mut first) {
