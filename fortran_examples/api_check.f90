@@ -9,7 +9,9 @@
 !  1. rve_update_timed, two calls per increment as a host's Newton makes them (a wrong
 !     iterate half-way, then the increment's strain, both with the increment's DTIME),
 !     then rve_commit; the second call reuses the increment's factorization
-!     (solver.fast_path): one factorization per increment;
+!     (solver.fast_path): at most one factorization per increment (none where the
+!     increment carries the last one over: an unloading or closed RVE), none in a second
+!     call;
 !  2. rve_umat with the Abaqus argument list (NTENS = 3, plane stress, NSTATV = 3,
 !     PROPS(1:6) = 0: the scene's values and the consistent tangent, CMNAME
 !     PAPER_RVE_HOST_IMPLEX), STATEV reset before every call as CalculiX does; each
@@ -359,20 +361,22 @@ contains
     integer(c_int32_t) :: st
     real(c_double) :: last(3), eps(3), stress(3), raw(3, 3), d(3, 3)
     type(rve_info) :: info
-    integer :: k, factorizations
+    integer :: k, factorizations, most, second
     logical :: ok
     hi = 0
     call expect_status(rve_init_file_f(path, hi), RVE_STATUS_OK, 'rve_init_file_f ' // path)
-    last = 0; ok = hi /= 0; factorizations = 0
+    last = 0; ok = hi /= 0; factorizations = 0; most = 0; second = 0
     do k = 1, size(ref, 2)
       eps = ref(4:6, k)
       st = rve_update_timed(hi, 0.5_c_double * (last + eps), ref(3, k), stress, raw, &
           RVE_TANGENT_REQUEST_CONSISTENT, info)
       factorizations = factorizations + int(info%factorizations)
+      most = max(most, int(info%factorizations))
       ok = ok .and. st == RVE_STATUS_OK
       st = rve_update_timed(hi, eps, ref(3, k), stress, raw, RVE_TANGENT_REQUEST_CONSISTENT, &
           info)
       factorizations = factorizations + int(info%factorizations)
+      second = second + int(info%factorizations)
       d = transpose(raw)       ! raw holds C's row-major array
       ok = ok .and. st == RVE_STATUS_OK .and. matches(ref, k, stress, d)
       st = rve_commit(hi)
@@ -380,7 +384,8 @@ contains
       last = eps
     end do
     call expect(ok, 'implex: rve_update_timed equals C''s results bit for bit')
-    call expect(factorizations == size(ref, 2), 'implex: one factorization per increment')
+    call expect(most == 1 .and. second == 0 .and. factorizations <= size(ref, 2), &
+        'implex: at most one factorization per increment, none in its second call')
     call expect_status(rve_free(hi), RVE_STATUS_OK, 'rve_free')
     write (*, '(a,i0,a,i0,2a)') 'implex, module rve_update_timed: ', size(ref, 2), &
         ' increments (2 calls each, ', factorizations, ' factorizations) ', verdict(ok)

@@ -148,9 +148,9 @@ contains
   subroutine paper_cycle()
     real(real64) :: stran(3), eps(3), half(3), big(3), stress(3), ddsdde(3, 3), statev(3)
     real(real64) :: pnewdt, time(2), dt, props(0)
-    integer :: kinc, i, j
+    integer :: kinc, i, j, asked
     logical :: ok_stress, ok_tangent, ok_counts, ok_id
-    stran = 0; time = 0; dt = 1.0_real64 / rows
+    stran = 0; time = 0; dt = 1.0_real64 / rows; asked = 0
     ok_stress = .true.; ok_tangent = .true.; ok_counts = .true.; ok_id = .true.
     do kinc = 1, rows
       eps = ref(2:4, kinc)
@@ -177,16 +177,21 @@ contains
       end do
       ok_counts = ok_counts .and. same_bits(statev(2), ref(17, kinc)) .and. &
           same_bits(statev(3), ref(18, kinc))
-      ok_id = ok_id .and. statev(1) >= 1 .and. pnewdt > 1
+      ! PNEWDT stays untouched, but where the RVE's answer depends on the step
+      ! (solver.step_check: an increment's two halves reach another equilibrium), which
+      ! asks for half the step and changes no answer.
+      if (same_bits(pnewdt, 0.5_real64)) asked = asked + 1
+      ok_id = ok_id .and. statev(1) >= 1 .and. (pnewdt > 1 .or. same_bits(pnewdt, 0.5_real64))
       stran = eps
       time = time + dt
     end do
     call expect(ok_stress, 'cycle: STRESS equals the C driver''s stress bit for bit')
     call expect(ok_tangent, 'cycle: DDSDDE(i, j) equals the C tangent[3 i + j] bit for bit')
     call expect(ok_counts, 'cycle: STATEV(2:3) are the RVE iterations and sub-steps')
-    call expect(ok_id, 'cycle: STATEV(1) holds the point id, PNEWDT untouched')
-    write (*, '(a,i0,a)') 'cycle: ', rows, ' increments (3 of them cut back) bit-identical' &
-        // ' to the C driver'
+    call expect(ok_id, 'cycle: STATEV(1) holds the point id, PNEWDT untouched or 0.5')
+    call expect(asked < rows / 10, 'cycle: PNEWDT 0.5 on a few increments at most')
+    write (*, '(a,i0,a,i0,a)') 'cycle: ', rows, ' increments (3 of them cut back, ', asked, &
+        ' asking for PNEWDT 0.5) bit-identical to the C driver'
   end subroutine paper_cycle
 
   ! Part 2: NTENS = 4 and 6 on the plane-strain scene give one answer.
