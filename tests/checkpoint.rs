@@ -93,7 +93,7 @@ fn a_refused_load_changes_nothing() {
     // A later format with its own checksum; the same version change without one is
     // corruption.
     let mut future = bytes.clone();
-    future[8..12].copy_from_slice(&9u32.to_le_bytes());
+    future[8..12].copy_from_slice(&(rve::STATE_FORMAT_VERSION + 1).to_le_bytes());
     let e = inst.load_state(&future).unwrap_err();
     assert!(matches!(e, Error::BadState { .. }), "{e}");
     let body = future.len() - 4;
@@ -105,10 +105,10 @@ fn a_refused_load_changes_nothing() {
     let e = inst.load_state(&truncated).unwrap_err();
     assert!(matches!(e, Error::BadState { .. }), "{e}");
     let e = inst.load_state(&future).unwrap_err();
-    assert!(matches!(e, Error::StateVersion { found: 9, .. }), "{e}");
+    assert!(matches!(e, Error::StateVersion { found: 10, .. }), "{e}");
     assert_eq!(
         e.to_string(),
-        "state format version 9; this library reads versions [1, 2, 3, 4, 5, 6, 7] and 8"
+        "state format version 10; this library reads versions [1, 2, 3, 4, 5, 6, 7, 8] and 9"
     );
     let e = inst.load_state(&foreign).unwrap_err();
     assert!(matches!(e, Error::StateMismatch { .. }), "{e}");
