@@ -123,7 +123,9 @@ fn a_refused_load_changes_nothing() {
     );
     let words = nh.div_ceil(64);
     let mut beyond = bytes.clone();
-    let bitset = beyond.len() - 4 - 8 * words;
+    // The bitset's words end where the (empty, implicit) IMPL-EX history starts: two
+    // empty vectors' lengths, the step and a flag, 25 bytes before the checksum.
+    let bitset = beyond.len() - 4 - 25 - 8 * words;
     let byte = bitset + 8 * (points / 64) + (points % 64) / 8;
     beyond[byte] |= 1 << (points % 8);
     let body = beyond.len() - 4;
