@@ -348,7 +348,7 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     assert_eq!(load(&bytes[..size - 1]), RveStatus::BadState as u32);
     // A format this library does not know, with a valid checksum (a later version), is
     // STATE_VERSION; the same version change without a new checksum is corruption.
-    for unknown_version in [0u8, 9] {
+    for unknown_version in [0u8, rve::STATE_FORMAT_VERSION as u8 + 1] {
         let mut other_version = bytes.clone();
         other_version[8] = unknown_version;
         assert_eq!(load(&other_version), RveStatus::BadState as u32);
@@ -584,7 +584,10 @@ fn a_format_1_checkpoint_of_version_0_1_0_still_loads() {
         unsafe { rve_state_save(old, saved.as_mut_ptr(), size, &mut written) },
         OK
     );
-    assert_eq!(u32::from_le_bytes(saved[8..12].try_into().unwrap()), 8);
+    assert_eq!(
+        u32::from_le_bytes(saved[8..12].try_into().unwrap()),
+        rve::STATE_FORMAT_VERSION
+    );
     assert_eq!(
         unsafe { rve_state_load(fresh, saved.as_ptr(), written) },
         OK
