@@ -364,8 +364,10 @@ fn state_bytes_round_trip_and_refuse_foreign_states() {
     let mut negative = bytes.clone();
     let n = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
     let nh = u64::from_le_bytes(bytes[24..32].try_into().unwrap()) as usize;
+    // Format 9 ends the payload with the IMPL-EX history: 25 bytes when empty (implicit).
     let curvature_at = negative.len()
         - CHECKSUM
+        - 25
         - held_contact_bytes(nh)
         - NO_FAST_PATH_DATA
         - curvature_bytes(n, true);
