@@ -114,20 +114,11 @@ pub fn build(
     if !problem.settings.fast_path || ws.current.counts.loading > 0 || !exact_kg {
         return;
     }
-    let (n, points) = (problem.n(), problem.disc.interface_points());
+    let points = problem.disc.interface_points();
     let linear = &mut state.linear;
     linear.jumps.resize(JUMP_OPERATOR_LEN * points, 0.0);
     linear.closed.resize(points, false);
-    // Column j of X_b = -K_b^-1 G gives the jumps per unit strain component j.
-    let kg = ws.factorization.kg();
-    for j in 0..3 {
-        let column = &kg[j * n..(j + 1) * n];
-        let jumps = &mut linear.jumps;
-        problem.disc.for_each_jump(column, |q, [s, nn]| {
-            jumps[JUMP_OPERATOR_LEN * q + j] = -s as f32;
-            jumps[JUMP_OPERATOR_LEN * q + 3 + j] = -nn as f32;
-        });
-    }
+    jump_operators(problem, ws.factorization.kg(), &mut linear.jumps);
     let closed = &mut linear.closed;
     problem
         .disc
@@ -150,6 +141,20 @@ pub fn build(
     // of the cohesive shear, a point at a branch boundary): otherwise no fast path.
     if !answers(problem, &state.history, &state.linear, &state.strain) {
         state.linear.invalidate();
+    }
+}
+
+/// Every interface point's jump operator `A_q = J_q X` into `jumps` (f32, see
+/// [`LinearBranch`]) from `kg = K^-1 G`: column j of `X = -K^-1 G` gives the jumps per
+/// unit strain component j. Shared with IMPL-EX's step (`implex::store_step`).
+pub(super) fn jump_operators(problem: &Problem, kg: &[f64], jumps: &mut [f32]) {
+    let n = problem.n();
+    for j in 0..3 {
+        let column = &kg[j * n..(j + 1) * n];
+        problem.disc.for_each_jump(column, |q, [s, nn]| {
+            jumps[JUMP_OPERATOR_LEN * q + j] = -s as f32;
+            jumps[JUMP_OPERATOR_LEN * q + 3 + j] = -nn as f32;
+        });
     }
 }
 

@@ -130,14 +130,7 @@ pub fn store_step(
     linear.closed.clear();
     linear.closed.extend_from_slice(&ws.contact.start[..points]);
     let kg = ws.factorization.kg();
-    for j in 0..3 {
-        let column = &kg[j * n..(j + 1) * n];
-        let jumps = &mut linear.jumps;
-        problem.disc.for_each_jump(column, |q, [s, nn]| {
-            jumps[JUMP_OPERATOR_LEN * q + j] = -s as f32;
-            jumps[JUMP_OPERATOR_LEN * q + 3 + j] = -nn as f32;
-        });
-    }
+    super::fast_path::jump_operators(problem, kg, &mut linear.jumps);
     linear.tangent = tangent;
     linear.szz = szz;
     linear.unknowns_strain = *strain;
