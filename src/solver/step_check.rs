@@ -42,7 +42,9 @@ pub fn applies(
 
 /// Solves the increment from `committed` to `strain` in two half steps and returns whether
 /// they end on another equilibrium than `trial` (a half step that fails counts as no
-/// evidence), with the factorizations it took. Overwrites the workspace's factors.
+/// evidence), with the factorizations it took. Overwrites the workspace's factors; its
+/// Newton loops run in the check's own buffers, so the residual history and the last
+/// evaluation still describe the answered increment.
 pub fn depends_on_step(
     problem: &Problem,
     committed: &State,
@@ -50,8 +52,9 @@ pub fn depends_on_step(
     trial: &State,
     ws: &mut Workspace,
 ) -> (bool, u32) {
+    ws.swap_step_check_buffers();
     let [mut first, mut second] = std::mem::replace(
-        &mut ws.half_steps,
+        &mut ws.step_check.half_steps,
         [State::virgin(0, 0), State::virgin(0, 0)],
     );
     let middle = std::array::from_fn(|c| 0.5 * (committed.strain[c] + strain[c]));
@@ -72,6 +75,7 @@ pub fn depends_on_step(
             other = diff > STEP_CHECK_TOLERANCE * norm(&trial.unknowns);
         }
     }
-    ws.half_steps = [first, second];
+    ws.step_check.half_steps = [first, second];
+    ws.swap_step_check_buffers();
     (other, factorizations)
 }

@@ -202,10 +202,35 @@ pub(super) struct ContactBuffers {
 }
 
 impl ContactBuffers {
+    fn new(points: usize) -> Self {
+        ContactBuffers {
+            held: false,
+            start: vec![false; points],
+            now: vec![false; points],
+            switches: vec![0; points],
+            read: vec![false; points],
+            pinned: vec![false; points],
+            saved: vec![false; points],
+        }
+    }
+
     /// The status to evaluate with: the held one, or `None` (read from the gaps).
     pub fn status(&self) -> Option<&[bool]> {
         self.held.then_some(self.now.as_slice())
     }
+}
+
+/// What a step check's Newton loops write besides their states: its own copies of the
+/// buffers an update leaves for inspection (last evaluation, residual history, branch
+/// signatures, start history, held contact status), swapped in for the check and out after
+/// it, so the workspace still describes the answered increment.
+pub(super) struct StepCheckBuffers {
+    pub half_steps: [State; 2],
+    current: Evaluation,
+    residuals: Vec<f64>,
+    branch_signatures: Vec<u64>,
+    history_start: Vec<f64>,
+    contact: ContactBuffers,
 }
 
 /// Per-thread scratch for the updates of one model (`Model::update`).
@@ -230,8 +255,9 @@ pub struct Workspace {
     pub(super) substep_start: State,
     /// A lazy committed state with its unknowns formed (see `fast_path::materialize`).
     pub(super) materialized: State,
-    /// The two half steps of a step check (see `step_check`).
-    pub(super) half_steps: [State; 2],
+    /// The two half steps of a step check, and the buffers its Newton loops run in (see
+    /// `step_check`).
+    pub(super) step_check: StepCheckBuffers,
     pub(super) trace: TraceBuffers,
     pub(super) contact: ContactBuffers,
     /// Relative residual norms of the last Newton loop, and the interface branch signature
@@ -269,7 +295,14 @@ impl Workspace {
             history_start: vec![0.0; nh],
             substep_start: State::with_capacity(n, nh),
             materialized: State::with_capacity(n, nh),
-            half_steps: [State::with_capacity(n, nh), State::with_capacity(n, nh)],
+            step_check: StepCheckBuffers {
+                half_steps: [State::with_capacity(n, nh), State::with_capacity(n, nh)],
+                current: Evaluation::new(n, nnz, nh),
+                residuals: Vec::with_capacity(max_iterations + 2),
+                branch_signatures: Vec::with_capacity(max_iterations + 2),
+                history_start: vec![0.0; nh],
+                contact: ContactBuffers::new(disc.interface_points()),
+            },
             trace: TraceBuffers {
                 f: zeros(),
                 dxf: zeros(),
@@ -278,19 +311,22 @@ impl Workspace {
                 pred: zeros(),
                 held_dxf: zeros(),
             },
-            contact: ContactBuffers {
-                held: false,
-                start: vec![false; disc.interface_points()],
-                now: vec![false; disc.interface_points()],
-                switches: vec![0; disc.interface_points()],
-                read: vec![false; disc.interface_points()],
-                pinned: vec![false; disc.interface_points()],
-                saved: vec![false; disc.interface_points()],
-            },
+            contact: ContactBuffers::new(disc.interface_points()),
             residuals: Vec::with_capacity(max_iterations + 2),
             branch_signatures: Vec::with_capacity(max_iterations + 2),
             model_id,
         }
+    }
+
+    /// Swaps the answered increment's inspectable buffers with the step check's (twice:
+    /// back to the answered increment's).
+    pub(super) fn swap_step_check_buffers(&mut self) {
+        let spare = &mut self.step_check;
+        std::mem::swap(&mut self.current, &mut spare.current);
+        std::mem::swap(&mut self.residuals, &mut spare.residuals);
+        std::mem::swap(&mut self.branch_signatures, &mut spare.branch_signatures);
+        std::mem::swap(&mut self.history_start, &mut spare.history_start);
+        std::mem::swap(&mut self.contact, &mut spare.contact);
     }
 
     /// The model this workspace was sized for.
