@@ -3,7 +3,10 @@
 //! (CalculiX, which upper-cases the function name of `@ABAQUS_<LIB>_<FUNC>`). Only
 //! pointer translation here; the logic is `crate::host::umat`.
 
+use std::collections::HashSet;
 use std::ffi::{c_char, c_int};
+use std::io::Write;
+use std::sync::{LazyLock, Mutex, PoisonError};
 
 use super::boundary::{guard, slice, slice_mut, Failure, FfiResult};
 use super::status::RveStatus;
@@ -12,6 +15,86 @@ use crate::host::Hypothesis;
 
 /// CMNAME is `CHARACTER*80` in Abaqus: no more is read.
 const CMNAME_MAX: usize = 80;
+
+/// The failure reasons printed on stderr by this process (see [`reason_key`]): a host
+/// calls the UMAT at every point of every element, and an element type the RVE cannot
+/// answer (a plane-stress element on a plane-strain scene, an axisymmetric one) fails at
+/// each of them for one reason, which is printed once.
+static PRINTED: LazyLock<Mutex<HashSet<String>>> = LazyLock::new(|| Mutex::new(HashSet::new()));
+
+/// What stands after the first line of a reason.
+const PRINTED_ONCE: &str =
+    "(printed once per process for this reason; rve_last_error has each call's message)";
+
+/// `text` with every number replaced by `#`: a run of digits that does not continue a
+/// word (`gamma_13`, `E33` and `NTENS` stay), with its sign, decimals and exponent
+/// (`-1.5e-5`, `0.25`, `4`). What the same reason at another point or strain shares.
+fn mask_numbers(text: &str) -> String {
+    let c: Vec<char> = text.chars().collect();
+    let word = |i: usize| i > 0 && (c[i - 1].is_alphanumeric() || c[i - 1] == '_');
+    let digit = |i: usize| c.get(i).is_some_and(char::is_ascii_digit);
+    let digits_from = |mut i: usize| {
+        while digit(i) {
+            i += 1;
+        }
+        i
+    };
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < c.len() {
+        let signed = matches!(c[i], '-' | '+') && digit(i + 1);
+        if !(digit(i) || signed) || word(i) {
+            out.push(c[i]);
+            i += 1;
+            continue;
+        }
+        i = digits_from(i + usize::from(signed));
+        if c.get(i) == Some(&'.') && digit(i + 1) {
+            i = digits_from(i + 1);
+        }
+        if matches!(c.get(i), Some('e' | 'E')) {
+            let sign = usize::from(matches!(c.get(i + 1), Some('-' | '+')));
+            if digit(i + 1 + sign) {
+                i = digits_from(i + 1 + sign);
+            }
+        }
+        out.push('#');
+    }
+    out
+}
+
+/// The key a failure is printed once under: the material's name and the error's text
+/// with its numbers masked (element and point numbers are not part of the error's text:
+/// the line prints them beside it).
+fn reason_key(material: &str, reason: &str) -> String {
+    format!("{material}\u{0}{}", mask_numbers(reason))
+}
+
+/// Writes `line` (and the note that it is printed once) to `out` when `seen` does not
+/// hold the reason yet, and remembers it; returns whether it wrote. Write errors are
+/// ignored (stderr closed: nothing to tell).
+fn report_once(
+    seen: &mut HashSet<String>,
+    material: &str,
+    reason: &str,
+    line: &str,
+    out: &mut dyn Write,
+) -> bool {
+    if !seen.insert(reason_key(material, reason)) {
+        return false;
+    }
+    let _ = writeln!(out, "{line} {PRINTED_ONCE}");
+    true
+}
+
+/// [`report_once`] on stderr with the process's [`PRINTED`] reasons. Never unwinds (it
+/// also runs outside the panic boundary).
+fn print_once(material: &str, reason: &str, line: &str) {
+    let _ = std::panic::catch_unwind(|| {
+        let mut seen = PRINTED.lock().unwrap_or_else(PoisonError::into_inner);
+        report_once(&mut seen, material, reason, line, &mut std::io::stderr());
+    });
+}
 
 /// The UMAT of the RVE, with the Abaqus argument list (every argument by reference, as
 /// Fortran passes it, then the hidden length of `CMNAME`). See the README, "Use it from
@@ -31,7 +114,10 @@ const CMNAME_MAX: usize = 80;
 ///   after a failure or with a smaller `DTIME`) reverts;
 /// - outputs: `STRESS`, `DDSDDE` (`NTENS` x `NTENS`, column-major), `STATEV(1..3)` when
 ///   `NSTATV` allows (point id, RVE iterations, sub-steps; never read back); on failure
-///   `PNEWDT` < 1, a message on stderr and in `rve_last_error`, `STRESS` untouched.
+///   `PNEWDT` < 1, a message in `rve_last_error`, `STRESS` untouched, and a line on
+///   stderr the first time the process meets the reason (the material and the error's
+///   text up to its numbers: a layout the RVE cannot answer prints one line, not one per
+///   point).
 ///
 /// `SSE`, `SPD`, `SCD`, `RPL`, `DDSDDT`, `DRPLDE`, `DRPLDT` are not written; `TEMP`,
 /// `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `CELENT`, `DFGRD0`, `DFGRD1`, `LAYER`,
@@ -139,7 +225,11 @@ pub unsafe extern "C" fn rve_umat(
         global().call(&call, &mut outputs).map(|_| ()).map_err(|f| {
             reported = true;
             if f.first_report {
-                eprintln!("mesorve UMAT: {f}");
+                print_once(
+                    &f.cmname,
+                    &f.error.to_string(),
+                    &format!("mesorve UMAT: {f}"),
+                );
             }
             Failure {
                 status: RveStatus::from(&*f.error),
@@ -150,7 +240,8 @@ pub unsafe extern "C" fn rve_umat(
     });
     if status != RveStatus::Ok && !reported {
         // Failed before the table saw the call (bad NTENS, a NULL argument, a panic).
-        eprintln!("mesorve UMAT: {}", super::last_error_message());
+        let message = super::last_error_message();
+        print_once("", &message, &format!("mesorve UMAT: {message}"));
         if let Some(p) = pnewdt.as_mut() {
             *p = FAILURE_STEP_RATIO;
         }
@@ -215,3 +306,50 @@ macro_rules! umat_alias {
 
 umat_alias!(umat_);
 umat_alias!(UMAT);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Numbers go, names with digits stay.
+    #[test]
+    fn numbers_are_masked_words_are_not() {
+        assert_eq!(
+            mask_numbers("E33 = -1.5e-5 (strain component 3 of NTENS = 4), gamma_13 0.25"),
+            "E33 = # (strain component # of NTENS = #), gamma_13 #"
+        );
+        assert_eq!(mask_numbers("the 2D RVE, 1e+3, x-1"), "the #D RVE, #, x-#");
+    }
+
+    /// Two points failing for the same reason (at other strains) print one line; another
+    /// reason, or the same one for another material, prints its own.
+    #[test]
+    fn a_reason_is_printed_once() {
+        let why = |e: f64| {
+            format!(
+                "host convention: E33 = {e:e} (strain component 3 of NTENS = 4): the 2D RVE \
+                 holds the out-of-plane strains at zero"
+            )
+        };
+        let calls = [
+            ("CONCRETE", why(1.2e-5), 1, 1),
+            ("CONCRETE", why(-3.4e-6), 7, 4),
+            ("CONCRETE", "host convention: NTENS = 5".to_string(), 7, 4),
+            ("CONCRETE2", why(1.2e-5), 9, 1),
+            ("CONCRETE", why(5e-7), 300, 2),
+        ];
+        let (mut seen, mut out) = (HashSet::new(), Vec::new());
+        let printed: Vec<bool> = calls
+            .iter()
+            .map(|(material, reason, noel, npt)| {
+                let line = format!("mesorve UMAT: element {noel}, point {npt}: {reason}");
+                report_once(&mut seen, material, reason, &line, &mut out)
+            })
+            .collect();
+        assert_eq!(printed, [true, false, true, true, false]);
+        let text = String::from_utf8(out).unwrap();
+        assert_eq!(text.lines().count(), 3);
+        assert!(text.starts_with("mesorve UMAT: element 1, point 1: host convention: E33 = 1.2e-5"));
+        assert!(text.lines().all(|l| l.ends_with(PRINTED_ONCE)));
+    }
+}
