@@ -64,8 +64,8 @@ fn mask_numbers(text: &str) -> String {
 }
 
 /// The key a failure is printed once under: the material's name and the error's text
-/// with its numbers masked (element and point numbers are not part of the error's text:
-/// the line prints them beside it).
+/// with its numbers masked (the strain, PNEWDT, and the element and point numbers a few
+/// errors name; the line itself prints the element and point beside the error).
 fn reason_key(material: &str, reason: &str) -> String {
     format!("{material}\u{0}{}", mask_numbers(reason))
 }
