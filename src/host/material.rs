@@ -47,6 +47,7 @@ use super::hypothesis::PlaneResponse;
 use crate::error::{Error, Result};
 use crate::model::{cache, Model};
 use crate::scene::DEFAULT_SCENE_TOML;
+use crate::solver::TangentRequest;
 
 /// The environment variable that lists the directories searched for scene files.
 pub const SCENE_PATH_VAR: &str = "MESORVE_SCENE_PATH";
@@ -159,6 +160,15 @@ pub struct Material {
 }
 
 impl Material {
+    /// What the RVE is asked for: the consistent tangent, or none when the host gets the
+    /// elastic one.
+    pub fn tangent_request(&self) -> TangentRequest {
+        match self.tangent {
+            TangentChoice::Consistent => TangentRequest::Consistent,
+            TangentChoice::Elastic => TangentRequest::None,
+        }
+    }
+
     /// Resolves a material name and its constants (see the module documentation).
     pub fn resolve(cmname: &str, props: &[f64], path: &SearchPath) -> Result<Material> {
         let overrides = overrides(props)?;

@@ -46,14 +46,15 @@
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, LazyLock, Mutex, PoisonError, RwLock, TryLockError};
+use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockError};
 
 use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, TangentChoice};
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
-use crate::solver::TangentRequest;
+use crate::solver::Answer;
+use crate::state::statev;
 
 /// Printed once per process when an increment's answer depends on its size.
 static STEP_NOTE: std::sync::Once = std::sync::Once::new();
@@ -147,6 +148,9 @@ pub struct UmatStats {
     pub commits: u64,
     /// Trials dropped on a cut-back.
     pub reverts: u64,
+    /// `STATEV` mode: committed states rebuilt from `STATEV` (once per point and
+    /// increment, and after any change the host made to the values).
+    pub loads: u64,
     pub failures: u64,
     /// Points in the table.
     pub points: u64,
@@ -189,6 +193,27 @@ struct Increment {
     start: f64,
 }
 
+impl Increment {
+    /// Whether this increment comes before `prev`: an earlier step, an earlier total time
+    /// (beyond round-off) in the same step, or an earlier `KINC` at the same time.
+    fn goes_back_from(&self, prev: &Increment) -> bool {
+        let roundoff = TIME_ROUNDOFF * prev.start.abs();
+        self.kstep < prev.kstep
+            || (self.kstep == prev.kstep
+                && (self.start < prev.start - roundoff
+                    || (self.start <= prev.start + roundoff && self.kinc < prev.kinc)))
+    }
+}
+
+/// Printed once per process: a table point restarted from virgin.
+static BACKWARDS_NOTE: std::sync::Once = std::sync::Once::new();
+/// Printed once per process: `NSTATV` too small for `STATEV` mode.
+static TABLE_NOTE: std::sync::Once = std::sync::Once::new();
+
+fn warn_once(once: &std::sync::Once, message: impl FnOnce() -> String) {
+    once.call_once(|| eprintln!("{}", message()));
+}
+
 /// One integration point.
 struct Point {
     id: u64,
@@ -202,6 +227,9 @@ struct Point {
     last: Option<([f64; 3], Response)>,
     /// The last call failed.
     failed: bool,
+    /// `STATEV` mode: the values the committed state was rebuilt from (see
+    /// [`Umat::statev_answer`]); `None` in table mode and before the first call.
+    core_values: Option<Vec<u64>>,
 }
 
 impl Point {
@@ -209,6 +237,21 @@ impl Point {
     /// reverted).
     fn advance(&mut self, inc: Increment, dtime: f64) -> crate::Result<(bool, bool)> {
         let (mut committed, mut reverted) = (false, false);
+        if let Some(prev) = self.increment.filter(|prev| inc.goes_back_from(prev)) {
+            // A new analysis (or a restart) in this process: the table cannot know the
+            // host's state at this time, so the point starts again from virgin.
+            warn_once(&BACKWARDS_NOTE, || {
+                format!(
+                    "mesorve: KSTEP/TIME went back from ({}, {}) to ({}, {}): points of the \
+                     library's table restart from virgin RVEs (keep the state in STATEV, \
+                     *DEPVAR = `rve info`'s umat_nstatv, to carry it)",
+                    prev.kstep, prev.start, inc.kstep, inc.start
+                )
+            });
+            self.instance.reset();
+            self.last = None;
+            self.increment = None;
+        }
         if let Some(prev) = self.increment {
             let advanced = inc.start - prev.start > TIME_ROUNDOFF * (prev.start.abs() + self.dtime);
             let same = prev.kstep == inc.kstep && prev.kinc == inc.kinc && !advanced;
@@ -270,6 +313,7 @@ pub struct Umat {
     repeats: AtomicU64,
     commits: AtomicU64,
     reverts: AtomicU64,
+    loads: AtomicU64,
     failures: AtomicU64,
 }
 
@@ -292,6 +336,7 @@ impl Umat {
             repeats: AtomicU64::new(0),
             commits: AtomicU64::new(0),
             reverts: AtomicU64::new(0),
+            loads: AtomicU64::new(0),
             failures: AtomicU64::new(0),
         }
     }
@@ -308,6 +353,7 @@ impl Umat {
             repeats: get(&self.repeats),
             commits: get(&self.commits),
             reverts: get(&self.reverts),
+            loads: get(&self.loads),
             failures: get(&self.failures),
             points: self
                 .points
@@ -338,25 +384,7 @@ impl Umat {
             first,
             material: None,
         })?;
-        let mut p = match point.try_lock() {
-            Ok(p) => p,
-            Err(TryLockError::WouldBlock) => {
-                return Err(plain(Error::HostConvention(format!(
-                    "element {}, point {} is being updated by another thread",
-                    c.noel, c.npt
-                ))))
-            }
-            Err(TryLockError::Poisoned(poisoned)) => {
-                // A panic during an earlier call: the committed state is only replaced by
-                // a whole swap, so it is intact; the trial is not.
-                point.clear_poison();
-                let mut p = poisoned.into_inner();
-                p.instance.revert();
-                p.last = None;
-                p.failed = true;
-                p
-            }
-        };
+        let mut p = lock(&point, c).map_err(plain)?;
         let material = p.material.clone();
         let with_material = |e: Error| Failed {
             error: Arc::new(e),
@@ -370,39 +398,31 @@ impl Umat {
                 c.noel, c.npt, p.key.cmname
             ))));
         }
-        let inc = Increment {
-            kstep: c.kstep,
-            kinc: c.kinc,
-            start: c.time[1],
+        let statev_len = material.model.statev_len();
+        let in_statev = out.statev.len() >= statev_len;
+        let (committed, reverted) = if in_statev {
+            (false, false)
+        } else {
+            table_note(c, out.statev.len(), statev_len);
+            let inc = Increment {
+                kstep: c.kstep,
+                kinc: c.kinc,
+                start: c.time[1],
+            };
+            p.advance(inc, c.dtime).map_err(with_material)?
         };
-        let (committed, reverted) = p.advance(inc, c.dtime).map_err(with_material)?;
         self.commits.fetch_add(committed as u64, Ordering::Relaxed);
         self.reverts.fetch_add(reverted as u64, Ordering::Relaxed);
-        let h = c.hypothesis;
-        let (r, solved) = match self.answer(&mut p, c) {
-            Ok(a) => a,
-            Err(e) => {
-                p.failed = true;
-                return Err(with_material(e));
-            }
+        let answer = if in_statev {
+            self.statev_answer(&mut p, c, &out.statev[..statev_len])
+        } else {
+            self.answer(&mut p, c)
         };
-        let mut plane = PlaneResponse::from(&r);
-        if material.tangent == TangentChoice::Elastic {
-            plane.tangent = material.elastic.tangent;
-            plane.s_zz_tangent = material.elastic.s_zz_tangent;
-        }
-        h.host_stress(&plane, out.stress).map_err(with_material)?;
-        h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)
-            .map_err(with_material)?;
-        let mirrors = [
-            p.id as f64,
-            r.report.iterations as f64,
-            r.report.substeps as f64,
-        ];
-        for (s, m) in out.statev.iter_mut().zip(mirrors) {
-            *s = m;
-        }
-        ask_for_smaller_step(c, &r, out);
+        let (r, solved) = answer.map_err(|e| {
+            p.failed = true;
+            with_material(e)
+        })?;
+        write_outputs(&p, c, &r, out, in_statev.then_some(statev_len)).map_err(with_material)?;
         Ok(Outcome {
             solved,
             committed,
@@ -414,27 +434,53 @@ impl Umat {
     /// The RVE's answer at the call's strain: the point's trial when the strain repeats
     /// it bit for bit, else a new trial (true: solved).
     fn answer(&self, p: &mut Point, c: &UmatCall) -> crate::Result<(Response, bool)> {
-        let h = c.hypothesis;
-        h.check_model(&p.material.model)?;
-        let total: Vec<f64> = c.stran.iter().zip(c.dstran).map(|(a, b)| a + b).collect();
-        let strain = h.rve_strain(&total)?;
+        let strain = call_strain(p, c)?;
         if let Some((s, r)) = p.last {
             if s.map(f64::to_bits) == strain.map(f64::to_bits) {
                 self.repeats.fetch_add(1, Ordering::Relaxed);
                 return Ok((r, false));
             }
         }
-        let request = match p.material.tangent {
-            TangentChoice::Consistent => TangentRequest::Consistent,
-            TangentChoice::Elastic => TangentRequest::None,
-        };
         self.solves.fetch_add(1, Ordering::Relaxed);
         let model = p.material.model.clone();
+        let request = p.material.tangent_request();
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         });
         p.last = r.as_ref().ok().map(|r| (strain, *r));
         Ok((r?, true))
+    }
+
+    /// `STATEV` mode: the answer from the committed state `statev` holds (the host's
+    /// start-of-increment values). The point's instance is a cache of that state, rebuilt
+    /// from the values whenever they differ from the ones it was rebuilt from, so the
+    /// answer is a function of `statev`, the strain and `DTIME` alone: a cut-back, a
+    /// restart, a new analysis or a re-added element gets what the host hands over. A
+    /// call that repeats the pending trial (same values, same strain) is not solved again.
+    fn statev_answer(
+        &self,
+        p: &mut Point,
+        c: &UmatCall,
+        statev: &[f64],
+    ) -> crate::Result<(Response, bool)> {
+        let strain = call_strain(p, c)?;
+        let model = p.material.model.clone();
+        let bits: Vec<u64> = statev.iter().map(|v| v.to_bits()).collect();
+        if p.core_values.as_ref() != Some(&bits) {
+            p.core_values = None;
+            let core = statev::read(statev, model.state_sizes(), model.interface_points())?;
+            with_workspace(&model, |ws| p.instance.load_core(core.as_ref(), ws))?;
+            p.core_values = Some(bits);
+            self.loads.fetch_add(1, Ordering::Relaxed);
+        }
+        let request = p.material.tangent_request();
+        let r = with_workspace(&model, |ws| {
+            p.instance.update_timed(strain, c.dtime, ws, request)
+        })?;
+        let solved = r.report.answer != Answer::Repeated;
+        let counter = if solved { &self.solves } else { &self.repeats };
+        counter.fetch_add(1, Ordering::Relaxed);
+        Ok((r, solved))
     }
 
     /// The point `(NOEL, NPT)`, created with its material on the first call.
@@ -458,6 +504,7 @@ impl Umat {
             dtime: 0.0,
             last: None,
             failed: false,
+            core_values: None,
         };
         let mut points = self.points.write().unwrap_or_else(PoisonError::into_inner);
         Ok(points
@@ -521,6 +568,89 @@ impl Umat {
             first_report,
         }
     }
+}
+
+/// The point's lock; a point poisoned by a panic in an earlier call keeps its committed
+/// state (only ever replaced whole) and drops its trial.
+fn lock<'p>(point: &'p PointRef, c: &UmatCall) -> crate::Result<MutexGuard<'p, Point>> {
+    match point.try_lock() {
+        Ok(p) => Ok(p),
+        Err(TryLockError::WouldBlock) => Err(Error::HostConvention(format!(
+            "element {}, point {} is being updated by another thread",
+            c.noel, c.npt
+        ))),
+        Err(TryLockError::Poisoned(poisoned)) => {
+            point.clear_poison();
+            let mut p = poisoned.into_inner();
+            p.instance.revert();
+            p.last = None;
+            p.failed = true;
+            p.core_values = None;
+            Ok(p)
+        }
+    }
+}
+
+/// The call's total strain `STRAN + DSTRAN` as the RVE's, for the point's model.
+fn call_strain(p: &Point, c: &UmatCall) -> crate::Result<[f64; 3]> {
+    let h = c.hypothesis;
+    h.check_model(&p.material.model)?;
+    let total: Vec<f64> = c.stran.iter().zip(c.dstran).map(|(a, b)| a + b).collect();
+    h.rve_strain(&total)
+}
+
+/// Says once per process that `STATEV` is too short to hold the state.
+fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
+    warn_once(&TABLE_NOTE, || {
+        format!(
+            "mesorve: material `{}`: NSTATV = {nstatv}, the RVE state needs {needed} \
+             (*DEPVAR, `rve info`'s umat_nstatv): the state stays in the library's table, \
+             which a restart, a second analysis or a re-added element does not carry \
+             (printed once)",
+            trim(c.cmname)
+        )
+    });
+}
+
+/// Writes `STRESS`, `DDSDDE` and `STATEV`: in `STATEV` mode (`Some(len)`) the trial's
+/// core in `STATEV(1:len)` and the inspection mirrors (point id, RVE iterations,
+/// sub-steps) after it, in table mode the mirrors from `STATEV(1)`; `PNEWDT` < 1 when
+/// the answer depends on the increment's size.
+fn write_outputs(
+    p: &Point,
+    c: &UmatCall,
+    r: &Response,
+    out: &mut UmatOutputs,
+    statev_len: Option<usize>,
+) -> crate::Result<()> {
+    let material = &p.material;
+    let mut plane = PlaneResponse::from(r);
+    if material.tangent == TangentChoice::Elastic {
+        plane.tangent = material.elastic.tangent;
+        plane.s_zz_tangent = material.elastic.s_zz_tangent;
+    }
+    let h = c.hypothesis;
+    h.host_stress(&plane, out.stress)?;
+    h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)?;
+    let mirrors_at = match statev_len {
+        Some(len) => {
+            let core = p.instance.trial_core()?;
+            let sizes = material.model.state_sizes();
+            statev::write(&core, sizes, &mut out.statev[..len])?;
+            len
+        }
+        None => 0,
+    };
+    let mirrors = [
+        p.id as f64,
+        r.report.iterations as f64,
+        r.report.substeps as f64,
+    ];
+    for (s, m) in out.statev[mirrors_at..].iter_mut().zip(mirrors) {
+        *s = m;
+    }
+    ask_for_smaller_step(c, r, out);
+    Ok(())
 }
 
 fn check_lengths(c: &UmatCall, out: &UmatOutputs) -> crate::Result<()> {

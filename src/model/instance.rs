@@ -9,7 +9,7 @@ use super::rve_model::{Model, Response};
 use crate::error::{Error, Result};
 use crate::solver::{implex, Answer, Integration, TangentRequest, Workspace};
 use crate::state::persist::{self, StateSizes};
-use crate::state::State;
+use crate::state::{Core, State};
 
 /// An RVE instance: what a host keeps per integration point.
 ///
@@ -322,6 +322,30 @@ impl Instance {
             });
         }
         self.committed = state;
+        self.implex_step = None;
+        self.revert();
+        Ok(())
+    }
+
+    /// The committed core of the pending trial (see [`crate::state::statev`]): what a host
+    /// keeping the state in its own variables stores after this update. `NoTrial` when
+    /// there is no pending trial.
+    pub fn trial_core(&self) -> Result<Core> {
+        match (self.pending, &self.trial) {
+            (Pending::Solved, Some(trial)) => Ok(self.model.core_of(trial)),
+            (Pending::Fast(strain), _) => {
+                let mut core = self.model.core_of(&self.committed);
+                core.strain = strain;
+                Ok(core)
+            }
+            _ => Err(Error::NoTrial),
+        }
+    }
+
+    /// Replaces the committed state by the one `core` stands for (`None`: virgin), rebuilt
+    /// by [`Model::expand_core`], and discards the trial. A refused core changes nothing.
+    pub fn load_core(&mut self, core: Option<&Core>, ws: &mut Workspace) -> Result<()> {
+        self.committed = self.model.expand_core(core, ws)?;
         self.implex_step = None;
         self.revert();
         Ok(())

@@ -9,6 +9,7 @@ mod instance;
 mod microstructure;
 mod post;
 mod rve_model;
+mod statev;
 pub(crate) mod workspaces;
 
 pub use instance::Instance;

@@ -37,7 +37,7 @@ pub struct Response {
 
 /// Everything that instances of one scene share. Immutable once built.
 pub struct Model {
-    id: u64,
+    pub(super) id: u64,
     pub scene: Scene,
     pub microstructure: Microstructure,
     pub disc: Discretization,
@@ -333,7 +333,7 @@ impl Model {
     }
 
     /// The problem the solver sees.
-    fn problem(&self) -> Problem<'_> {
+    pub(super) fn problem(&self) -> Problem<'_> {
         Problem {
             disc: &self.disc,
             linear: &self.linear,

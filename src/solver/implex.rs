@@ -204,3 +204,25 @@ pub fn finish_step(
     }
     report
 }
+
+/// The fluctuation of a converged state from its history and contact status alone: with
+/// every point on the linear branch through the origin its history and status give (the
+/// loading envelope meets that branch at `delta = delta_max`, eq. 24), the equilibrium is
+/// `K_s x + G eps = 0`, so `x = -K_s^-1 G eps` with one factorization. `state` holds the
+/// history, `state.implex.closed` the status and `strain` the macro strain; the result
+/// goes into `unknowns`. The converged fluctuation agrees to the solver's tolerance; this
+/// one is a function of the core alone (`crate::state::statev`).
+pub fn secant_unknowns(
+    problem: &Problem,
+    state: &State,
+    strain: &Strain,
+    ws: &mut Workspace,
+    unknowns: &mut [f64],
+) -> Result<()> {
+    factorize_step(problem, state, 0.0, ws)?;
+    let (n, kg) = (problem.n(), ws.factorization.kg());
+    for (i, x) in unknowns.iter_mut().enumerate() {
+        *x = -(kg[i] * strain[0] + kg[n + i] * strain[1] + kg[2 * n + i] * strain[2]);
+    }
+    Ok(())
+}

@@ -4,6 +4,7 @@
 mod instance_state;
 mod linear_branch;
 pub mod persist;
+pub mod statev;
 
 pub use instance_state::{
     held_contact_words, ImplexHistory, PathCurvature, Quantized, Sensitivity, State,
@@ -11,3 +12,4 @@ pub use instance_state::{
 };
 pub use linear_branch::{LinearBranch, JUMP_OPERATOR_LEN};
 pub use persist::{StateSizes, STATE_FORMAT_VERSION};
+pub use statev::Core;
