@@ -189,3 +189,32 @@ fn run_follows_the_unilateral_cycle_and_writes_the_csv() {
     assert!(rows[59][sig] < 0.0);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn info_gives_the_umat_nstatv_that_keeps_the_state() {
+    for (scene, integration) in [
+        ("scenes/paper_rve.toml", "implicit"),
+        ("scenes/paper_rve_host_implex.toml", "implex"),
+    ] {
+        let path = common::repo(scene);
+        let out = rve(&["info", path.to_str().unwrap(), "--json"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let model = rve::Model::from_scene(&common::scene(scene)).unwrap();
+        let nstatv = v["umat_nstatv"].as_u64().unwrap() as usize;
+        assert_eq!(nstatv, model.statev_len());
+        assert_eq!(v["unknowns"].as_u64(), Some(722));
+        assert_eq!(v["itz_points"].as_u64(), Some(288));
+        assert_eq!(v["integration"], integration);
+        // The target: the paper RVE's state in at most 800 host state variables.
+        assert!(nstatv <= 800, "{scene}: {nstatv}");
+        assert!(v["instance_bytes"].as_u64().unwrap() > v["checkpoint_bytes"].as_u64().unwrap());
+    }
+    let text = rve(&["info"]);
+    assert!(text.status.success());
+    assert!(String::from_utf8_lossy(&text.stdout).contains("umat_nstatv"));
+}

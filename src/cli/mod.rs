@@ -2,6 +2,7 @@
 //! binary only (declared by `src/main.rs`), so the library, and `librve.so` with it, does
 //! not link clap; it uses the library through its public API (`rve::...`).
 
+mod info_cmd;
 mod mesh_cmd;
 mod run_cmd;
 
@@ -29,6 +30,8 @@ enum Command {
     Mesh(mesh_cmd::MeshArgs),
     /// Follow the scene's strain path and write DIR/response.csv.
     Run(run_cmd::RunArgs),
+    /// Print a scene's RVE size, state bytes and umat_nstatv (the UMAT's *DEPVAR).
+    Info(info_cmd::InfoArgs),
 }
 
 /// Loads `path`, or the embedded paper scene when no path is given.
@@ -45,6 +48,7 @@ pub fn main() -> i32 {
     let result = match cli.command {
         Command::Mesh(args) => mesh_cmd::run(&args),
         Command::Run(args) => run_cmd::run(&args),
+        Command::Info(args) => info_cmd::run(&args),
     };
     match result {
         Ok(()) => 0,
