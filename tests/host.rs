@@ -1,7 +1,8 @@
 //! The host seam (`rve::host`): the NTENS 3/4/6 maps against the RVE's own answer, the
 //! UMAT's DDSDDE against finite differences of its STRESS (the `s_zz` row included), the
 //! increment protocol (commit on a new increment, revert on a cut-back, repeats answered
-//! without a solve), scene lookup and PROPS, a missing scene, and threads.
+//! without a solve), scene lookup and PROPS, a missing scene (and one written later), and
+//! threads.
 
 mod common;
 
@@ -644,6 +645,19 @@ fn a_missing_scene_is_a_clear_error_reported_once() {
     assert!(!f.first_report, "the same material error is reported once");
     assert_eq!(umat.stats().failures, 2);
     assert_eq!(umat.stats().points, 0);
+    // A scene file written after the failures is found at the next call.
+    std::fs::copy(dir.join("paper.toml"), dir.join("no_such_scene.toml")).unwrap();
+    let c = call(
+        &umat,
+        "@ABAQUS_RVE_UMAT@NO_SUCH_SCENE",
+        &[],
+        h,
+        &[0.0; 3],
+        &eps,
+        at(3, 1),
+    );
+    assert!(c.result.is_ok(), "the scene written later is used");
+    assert_eq!(umat.stats().points, 1);
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -514,21 +514,26 @@ impl Umat {
     }
 
     /// The material of a call, resolved once per name and `PROPS` (failures too, so a
-    /// bad material is reported once and not rebuilt at every point).
+    /// bad material is reported once and not rebuilt at every point; a scene file not
+    /// found is looked for again at the next call, so one written later is used).
     fn material(&self, c: &UmatCall) -> Result<Arc<Material>, (Arc<Error>, bool)> {
         let key = MaterialKey::of(c);
         let mut materials = self
             .materials
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
-        if let Some(entry) = materials.get(&key) {
-            return entry.clone().map_err(|e| (e, false));
-        }
+        let reported = match materials.get(&key) {
+            // A scene not found yet may be written later: searched again at every call
+            // (a few file tests), reported once.
+            Some(Err(e)) if matches!(**e, Error::SceneNotFound { .. }) => true,
+            Some(entry) => return entry.clone().map_err(|e| (e, false)),
+            None => false,
+        };
         let entry = Material::resolve(&key.cmname, c.props, &self.search)
             .map(Arc::new)
             .map_err(Arc::new);
         materials.insert(key, entry.clone());
-        entry.map_err(|e| (e, true))
+        entry.map_err(|e| (e, !reported))
     }
 
     fn fail(
