@@ -96,6 +96,105 @@ fn print_once(material: &str, reason: &str, line: &str) {
     });
 }
 
+/// The arguments of a UMAT call that the RVE reads or writes, as the host passed them.
+struct Args {
+    stress: *mut f64,
+    statev: *mut f64,
+    ddsdde: *mut f64,
+    stran: *const f64,
+    dstran: *const f64,
+    time: *const f64,
+    dtime: *const f64,
+    cmname: *const c_char,
+    cmname_len: usize,
+    ndi: *const c_int,
+    nshr: *const c_int,
+    ntens: *const c_int,
+    nstatv: *const c_int,
+    props: *const f64,
+    nprops: *const c_int,
+    pnewdt: *mut f64,
+    noel: *const c_int,
+    npt: *const c_int,
+    kstep: *const c_int,
+    kinc: *const c_int,
+}
+
+impl Args {
+    /// Checks and translates the arguments and calls the table; a failure the table saw
+    /// is printed (once per reason) and sets `reported`.
+    ///
+    /// # Safety
+    /// As [`rve_umat`]'s.
+    unsafe fn call(&self, reported: &mut bool) -> FfiResult {
+        let int = |p: *const c_int, name: &str| -> FfiResult<i32> {
+            p.as_ref().copied().ok_or_else(|| Failure::null(name))
+        };
+        let real = |p: *const f64, name: &str| -> FfiResult<f64> {
+            p.as_ref().copied().ok_or_else(|| Failure::null(name))
+        };
+        let hypothesis = Hypothesis::from_abaqus(
+            int(self.ndi, "NDI")?,
+            int(self.nshr, "NSHR")?,
+            int(self.ntens, "NTENS")?,
+        )?;
+        let n = hypothesis.ntens();
+        let count = |p: *const c_int, name: &str| -> FfiResult<usize> {
+            Ok(usize::try_from(int(p, name)?).unwrap_or(0))
+        };
+        let (nstatv, nprops) = (count(self.nstatv, "NSTATV")?, count(self.nprops, "NPROPS")?);
+        let name_len = (self.cmname_len as u32 as usize).min(CMNAME_MAX);
+        let name = String::from_utf8_lossy(slice(self.cmname.cast::<u8>(), name_len, "CMNAME")?);
+        let time = slice(self.time, 2, "TIME")?;
+        let pnewdt = self
+            .pnewdt
+            .as_mut()
+            .ok_or_else(|| Failure::null("PNEWDT"))?;
+        let call = UmatCall {
+            cmname: &name,
+            props: if nprops == 0 {
+                &[]
+            } else {
+                slice(self.props, nprops, "PROPS")?
+            },
+            hypothesis,
+            stran: slice(self.stran, n, "STRAN")?,
+            dstran: slice(self.dstran, n, "DSTRAN")?,
+            time: [time[0], time[1]],
+            dtime: real(self.dtime, "DTIME")?,
+            noel: int(self.noel, "NOEL")?,
+            npt: int(self.npt, "NPT")?,
+            kstep: int(self.kstep, "KSTEP")?,
+            kinc: int(self.kinc, "KINC")?,
+        };
+        let mut outputs = UmatOutputs {
+            stress: slice_mut(self.stress, n, "STRESS")?,
+            ddsdde: slice_mut(self.ddsdde, n * n, "DDSDDE")?,
+            statev: if nstatv == 0 {
+                &mut []
+            } else {
+                slice_mut(self.statev, nstatv, "STATEV")?
+            },
+            pnewdt,
+        };
+        global().call(&call, &mut outputs).map(|_| ()).map_err(|f| {
+            *reported = true;
+            if f.first_report {
+                print_once(
+                    &f.cmname,
+                    &f.error.to_string(),
+                    &format!("mesorve UMAT: {f}"),
+                );
+            }
+            Failure {
+                status: RveStatus::from(&*f.error),
+                message: f.to_string(),
+                step_ratio: Some(f.pnewdt),
+            }
+        })
+    }
+}
+
 /// The UMAT of the RVE, with the Abaqus argument list (every argument by reference, as
 /// Fortran passes it, then the hidden length of `CMNAME`). See the README, "Use it from
 /// an FE code", for the rules; in short:
@@ -176,68 +275,30 @@ pub unsafe extern "C" fn rve_umat(
         sse, spd, scd, rpl, ddsddt, drplde, drpldt, temp, dtemp, predef, dpred,
     );
     let _unused = (coords, drot, celent, dfgrd0, dfgrd1, layer, kspt);
+    let args = Args {
+        stress,
+        statev,
+        ddsdde,
+        stran,
+        dstran,
+        time,
+        dtime,
+        cmname,
+        cmname_len,
+        ndi,
+        nshr,
+        ntens,
+        nstatv,
+        props,
+        nprops,
+        pnewdt,
+        noel,
+        npt,
+        kstep,
+        kinc,
+    };
     let mut reported = false;
-    let status = guard("rve_umat", || {
-        let int = |p: *const c_int, name: &str| -> FfiResult<i32> {
-            p.as_ref().copied().ok_or_else(|| Failure::null(name))
-        };
-        let real = |p: *const f64, name: &str| -> FfiResult<f64> {
-            p.as_ref().copied().ok_or_else(|| Failure::null(name))
-        };
-        let hypothesis =
-            Hypothesis::from_abaqus(int(ndi, "NDI")?, int(nshr, "NSHR")?, int(ntens, "NTENS")?)?;
-        let n = hypothesis.ntens();
-        let count = |p: *const c_int, name: &str| -> FfiResult<usize> {
-            Ok(usize::try_from(int(p, name)?).unwrap_or(0))
-        };
-        let (nstatv, nprops) = (count(nstatv, "NSTATV")?, count(nprops, "NPROPS")?);
-        let name_len = (cmname_len as u32 as usize).min(CMNAME_MAX);
-        let name = String::from_utf8_lossy(slice(cmname.cast::<u8>(), name_len, "CMNAME")?);
-        let time = slice(time, 2, "TIME")?;
-        let pnewdt = pnewdt.as_mut().ok_or_else(|| Failure::null("PNEWDT"))?;
-        let call = UmatCall {
-            cmname: &name,
-            props: if nprops == 0 {
-                &[]
-            } else {
-                slice(props, nprops, "PROPS")?
-            },
-            hypothesis,
-            stran: slice(stran, n, "STRAN")?,
-            dstran: slice(dstran, n, "DSTRAN")?,
-            time: [time[0], time[1]],
-            dtime: real(dtime, "DTIME")?,
-            noel: int(noel, "NOEL")?,
-            npt: int(npt, "NPT")?,
-            kstep: int(kstep, "KSTEP")?,
-            kinc: int(kinc, "KINC")?,
-        };
-        let mut outputs = UmatOutputs {
-            stress: slice_mut(stress, n, "STRESS")?,
-            ddsdde: slice_mut(ddsdde, n * n, "DDSDDE")?,
-            statev: if nstatv == 0 {
-                &mut []
-            } else {
-                slice_mut(statev, nstatv, "STATEV")?
-            },
-            pnewdt,
-        };
-        global().call(&call, &mut outputs).map(|_| ()).map_err(|f| {
-            reported = true;
-            if f.first_report {
-                print_once(
-                    &f.cmname,
-                    &f.error.to_string(),
-                    &format!("mesorve UMAT: {f}"),
-                );
-            }
-            Failure {
-                status: RveStatus::from(&*f.error),
-                message: f.to_string(),
-                step_ratio: Some(f.pnewdt),
-            }
-        })
-    });
+    let status = guard("rve_umat", || args.call(&mut reported));
     if status != RveStatus::Ok && !reported {
         // Failed before the table saw the call (bad NTENS, a NULL argument, a panic).
         let message = super::last_error_message();
