@@ -131,11 +131,13 @@ struct Batch {
 }
 
 impl Batch {
+    /// Buffers for `n` items, written through (not zero pages the kernel maps later), so
+    /// that a resident set measured after this counts them.
     fn new(n: usize) -> Self {
         Batch {
-            strains: vec![0.0; 3 * n],
-            stresses: vec![0.0; 3 * n],
-            tangents: vec![0.0; 9 * n],
+            strains: vec![f64::NAN; 3 * n],
+            stresses: vec![f64::NAN; 3 * n],
+            tangents: vec![f64::NAN; 9 * n],
             statuses: vec![u32::MAX; n],
         }
     }
@@ -430,9 +432,10 @@ fn memory_loading(n: usize) {
     let warm: Vec<RveHandle> = (0..WARM_UP).map(|_| init()).collect();
     b.load(&warm, 2);
     b.run(&warm, eps(E_TRIAL), 2);
+    let mut handles = vec![-1; n];
     let rss0 = peak_rss_mib();
     let t = Instant::now();
-    let handles: Vec<RveHandle> = (0..n).map(|_| init()).collect();
+    handles.iter_mut().for_each(|h| *h = init());
     let t_init = t.elapsed().as_secs_f64();
     let mut seconds = b.load(&handles, 2);
     seconds.push(b.run(&handles, eps(E_TRIAL), 2));
@@ -506,17 +509,18 @@ fn fast_state_bytes() -> Vec<u8> {
 /// loaded, a fast update to increment 29 committed, one to increment 30 kept.
 fn memory_fast(n: usize) {
     let bytes = fast_state_bytes();
+    let mut handles = vec![-1; n];
     let rss0 = peak_rss_mib();
-    let handles: Vec<RveHandle> = (0..n)
-        .map(|_| {
-            let h = init();
-            assert_eq!(unsafe { rve_state_load(h, bytes.as_ptr(), bytes.len()) }, 0);
-            update(h, cycle_strain(29));
-            assert_eq!(rve_commit(h), 0);
-            update(h, cycle_strain(30));
-            h
-        })
-        .collect();
+    for h in handles.iter_mut() {
+        *h = init();
+        assert_eq!(
+            unsafe { rve_state_load(*h, bytes.as_ptr(), bytes.len()) },
+            0
+        );
+        update(*h, cycle_strain(29));
+        assert_eq!(rve_commit(*h), 0);
+        update(*h, cycle_strain(30));
+    }
     assert_eq!(fast_total(&handles), 2 * n as u64, "an update was solved");
     let rss = peak_rss_mib();
     memory_rows(
