@@ -2,18 +2,38 @@
 //! integration point) that follows the host's increments. `crate::ffi` exports it with
 //! the Abaqus argument list (`rve_umat`, `umat_`, `UMAT`) and only translates pointers.
 //!
+//! **Two modes, chosen per call by `NSTATV`.**
+//! - **`STATEV` mode** (`NSTATV` >= the model's [`Model::statev_len`](crate::Model::statev_len), which `rve info`
+//!   prints as `umat_nstatv`; the recommended mode). The point's committed RVE state is
+//!   `STATEV(1:umat_nstatv)`: its core (strain, interface history, contact status,
+//!   IMPL-EX's data) as integer-valued doubles with a checksum ([`statev`]); all zeros is
+//!   a virgin RVE. Each call solves from the state `STATEV` holds, at the total strain
+//!   `STRAN + DSTRAN` and the time increment `DTIME`, and writes the trial's core back.
+//!   The host keeps the values of the converged increment, hands the start-of-increment
+//!   values at every call (as Abaqus/Standard and CalculiX do), writes them to its
+//!   restart files and zeroes them for new elements and new analyses: there is no commit
+//!   or revert rule to guess. The table's instance of the point is a cache of that
+//!   state, rebuilt ([`Model::expand_core`](crate::Model::expand_core)) whenever the values differ from the ones it
+//!   was rebuilt from, so the answer is a function of `STATEV`, the strain and `DTIME`
+//!   alone. `STATEV(umat_nstatv+1..+3)` receive the inspection mirrors below. A
+//!   `STATEV` that is not exactly what the library wrote (flipped bits, a changed,
+//!   zeroed or truncated entry, another model's state) fails the call with a message.
+//! - **Table mode** (a smaller `NSTATV`; printed once on stderr). The RVE state lives in
+//!   the process's table keyed by `(NOEL, NPT)`, and the increments are inferred from
+//!   `(KSTEP, KINC, TIME(2))` as described next. A restart, a second analysis or a
+//!   re-added element then does not carry the state; a point whose `KSTEP` or `TIME(2)`
+//!   goes back (a new analysis in the process) restarts from a virgin RVE, said once.
+//!
 //! **Instances.** The first call for `(NOEL, NPT)` resolves the material (`CMNAME` and
 //! `PROPS`, see [`super::material`]) and creates a virgin instance of its model; the
-//! instance lives in the table until the process ends. `STATEV` is not needed: CalculiX
-//! hands the UMAT `STATEV` at its start-of-increment value on every call, so a handle
-//! written there during the first increment would be lost. When `NSTATV` allows,
-//! `STATEV(1)` receives the point's id in the table (1, 2, ... in creation order),
-//! `STATEV(2)` the RVE's Newton iterations and `STATEV(3)` its sub-steps, for
-//! inspection; the library never reads them.
+//! instance lives in the table until the process ends. When `NSTATV` allows, the
+//! mirrors (`STATEV(1:3)` in table mode, after the state in `STATEV` mode) receive the
+//! point's id in the table (1, 2, ... in creation order), the RVE's Newton iterations
+//! and its sub-steps, for inspection; the library never reads them.
 //!
-//! **Increments.** A call belongs to the increment `(KSTEP, KINC, TIME(2))`, `TIME(2)`
-//! being the total time at its start. Every call is a trial from the point's committed
-//! state at the total strain `STRAN + DSTRAN`. Then:
+//! **Increments (table mode).** A call belongs to the increment `(KSTEP, KINC, TIME(2))`,
+//! `TIME(2)` being the total time at its start. Every call is a trial from the point's
+//! committed state at the total strain `STRAN + DSTRAN`. Then:
 //! - a call of a new increment (`KSTEP` or `KINC` changed, or `TIME(2)` advanced beyond
 //!   round-off) first commits the point's last trial, which is the converged state of the
 //!   previous increment when the host's last call there was at its converged strain (as
@@ -23,15 +43,17 @@
 //!   the trial is dropped and the committed state stays;
 //! - a call at the same strain, bit for bit, as the point's current trial returns that
 //!   trial's answer without solving again (CalculiX calls twice per iteration, for the
-//!   stress and for the stiffness).
+//!   stress and for the stiffness; in `STATEV` mode too, with the same `STATEV`).
 //!
-//! Limits of the rule: a host that calls a point after convergence at another strain
-//! (a perturbation for a numerical tangent, a line-search probe) before the next
+//! Limits of the table rule: a host that calls a point after convergence at another
+//! strain (a perturbation for a numerical tangent, a line-search probe) before the next
 //! increment makes that trial the one committed; a host that moves on to a new increment
 //! after the point's last call failed (ignoring `PNEWDT`) commits nothing for it, and the
-//! point stays at its last converged state; `DROT`, `DFGRD*`, temperatures and field
-//! variables are ignored (small strains, the RVE's axes are the host's material axes);
-//! `SSE`, `SPD`, `SCD`, `RPL` and the thermal derivatives are not written.
+//! point stays at its last converged state; a host that keeps `KINC` and advances
+//! `TIME(2)` by less than `1e-9` of it commits nothing. In both modes `DROT`, `DFGRD*`,
+//! temperatures and field variables are ignored (small strains, the RVE's axes are the
+//! host's material axes); `SSE`, `SPD`, `SCD`, `RPL` and the thermal derivatives are not
+//! written.
 //!
 //! **Failures** (a missing scene, a host convention the RVE cannot answer, a solver
 //! failure) never panic across the boundary: `PNEWDT` receives a ratio below 1 (the
