@@ -224,3 +224,33 @@ fn a_table_point_restarts_from_virgin_when_time_goes_back() {
     let (second, _) = run(&table, "paper_rve", 1, 0..steps, vec![0.0; 3]);
     assert_eq!(second, first);
 }
+
+#[test]
+fn a_second_analysis_may_use_another_material_at_the_same_points() {
+    // STATEV mode: a point is a cache of what STATEV holds, so another material at the
+    // same (NOEL, NPT) is a new analysis, answered as in a fresh table.
+    let n = statev_len("paper_rve_host_implex").max(statev_len("paper_rve"));
+    let table = umat();
+    run(&table, "paper_rve", 1, 0..20, vec![0.0; n]);
+    let (second, _) = run(&table, "paper_rve_host_implex", 1, 0..20, vec![0.0; n]);
+    let (fresh, _) = run(&umat(), "paper_rve_host_implex", 1, 0..20, vec![0.0; n]);
+    assert_eq!(second, fresh);
+    // Table mode: within an analysis a point keeps its material...
+    let table = umat();
+    run(&table, "paper_rve", 1, 0..5, vec![0.0; 3]);
+    let path = path();
+    let same_time = try_call(
+        &table,
+        "paper_rve_host_implex",
+        1,
+        4,
+        &path[3],
+        &path[4],
+        &mut [0.0; 3],
+    );
+    assert!(same_time.3.unwrap_err().contains("keeps its material"));
+    // ...and a new analysis (TIME gone back) starts it again with the call's material.
+    let (again, _) = run(&table, "paper_rve_host_implex", 1, 0..5, vec![0.0; 3]);
+    let (fresh, _) = run(&umat(), "paper_rve_host_implex", 1, 0..5, vec![0.0; 3]);
+    assert_eq!(again, fresh);
+}

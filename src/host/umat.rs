@@ -255,6 +255,21 @@ struct Point {
 }
 
 impl Point {
+    /// A virgin point of `material`.
+    fn new(id: u64, key: MaterialKey, material: Arc<Material>) -> Self {
+        Point {
+            id,
+            key,
+            instance: Instance::new(material.model.clone()),
+            material,
+            increment: None,
+            dtime: 0.0,
+            last: None,
+            failed: false,
+            core_values: None,
+        }
+    }
+
     /// Applies the increment protocol before a call of `inc`; returns (committed,
     /// reverted).
     fn advance(&mut self, inc: Increment, dtime: f64) -> crate::Result<(bool, bool)> {
@@ -407,19 +422,15 @@ impl Umat {
             material: None,
         })?;
         let mut p = lock(&point, c).map_err(plain)?;
+        if !p.key.matches(c) {
+            self.rebind(&mut p, c, out.statev.len())?;
+        }
         let material = p.material.clone();
         let with_material = |e: Error| Failed {
             error: Arc::new(e),
             first: true,
             material: Some(material.clone()),
         };
-        if !p.key.matches(c) {
-            return Err(plain(Error::HostConvention(format!(
-                "element {}, point {} was created for material `{}` with other PROPS or \
-                 another name; a point keeps its material",
-                c.noel, c.npt, p.key.cmname
-            ))));
-        }
         let statev_len = material.model.statev_len();
         let in_statev = out.statev.len() >= statev_len;
         let (committed, reverted) = if in_statev {
@@ -505,6 +516,37 @@ impl Umat {
         Ok((r, solved))
     }
 
+    /// A point called with another material than it was created for: a new analysis
+    /// (`STATEV` mode, or table mode with `KSTEP`/`TIME(2)` gone back) makes it a virgin
+    /// point of the call's material; otherwise the call is refused.
+    fn rebind(&self, p: &mut Point, c: &UmatCall, nstatv: usize) -> Result<(), Failed> {
+        let material = self.material(c).map_err(|(error, first)| Failed {
+            error,
+            first,
+            material: None,
+        })?;
+        let inc = Increment {
+            kstep: c.kstep,
+            kinc: c.kinc,
+            start: c.time[1],
+        };
+        let new_analysis = nstatv >= material.model.statev_len()
+            || p.increment.is_some_and(|prev| inc.goes_back_from(&prev));
+        if !new_analysis {
+            return Err(Failed {
+                error: Arc::new(Error::HostConvention(format!(
+                    "element {}, point {} was created for material `{}` with other PROPS \
+                     or another name; a point keeps its material within an analysis",
+                    c.noel, c.npt, p.key.cmname
+                ))),
+                first: true,
+                material: None,
+            });
+        }
+        *p = Point::new(p.id, MaterialKey::of(c), material);
+        Ok(())
+    }
+
     /// The point `(NOEL, NPT)`, created with its material on the first call.
     fn point(&self, c: &UmatCall) -> Result<PointRef, (Arc<Error>, bool)> {
         let key = (c.noel, c.npt);
@@ -517,17 +559,8 @@ impl Umat {
             return Ok(p.clone());
         }
         let material = self.material(c)?;
-        let point = Point {
-            id: self.next_id.fetch_add(1, Ordering::Relaxed),
-            key: MaterialKey::of(c),
-            instance: Instance::new(material.model.clone()),
-            material,
-            increment: None,
-            dtime: 0.0,
-            last: None,
-            failed: false,
-            core_values: None,
-        };
+        let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+        let point = Point::new(id, MaterialKey::of(c), material);
         let mut points = self.points.write().unwrap_or_else(PoisonError::into_inner);
         Ok(points
             .entry(key)
