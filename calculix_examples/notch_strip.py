@@ -19,6 +19,9 @@ WIDTH, HEIGHT = 80.0, 50.0
 NOTCHES = ((0.0, 10.0, 20.0, 30.0), (70.0, 80.0, 20.0, 30.0))  # x0, x1, y0, y1
 UMAX = 0.020
 MATERIAL = "@ABAQUS_RVE_UMAT@CONCRETE_IMPLEX"
+# STATEV mode: `rve info calculix_examples/concrete_implex.toml`'s umat_nstatv (789) and
+# the three inspection mirrors (docs/calculix.md, "State in STATEV").
+DEPVAR = 792
 
 
 def grid(h):
@@ -87,7 +90,7 @@ def deck(a):
     lines, n = mesh(a.size)
     lines = header(a, n) + lines + [
         f"*MATERIAL, NAME={MATERIAL}", "*USER MATERIAL, CONSTANTS=6", "0., 0., 0., 0., 0., 0.",
-        "*DEPVAR", "3", f"*SOLID SECTION, ELSET=EALL, MATERIAL={MATERIAL}", "1.",
+        "*DEPVAR", str(DEPVAR), f"*SOLID SECTION, ELSET=EALL, MATERIAL={MATERIAL}", "1.",
         "*BOUNDARY", "BOTTOM, 2, 2, 0.", "1, 1, 1, 0."]
     lines += step(UMAX, a.increment, a.direct)
     if not a.tension_only:
