@@ -52,76 +52,16 @@ impl SceneSpec {
         let [w, h] = self.cell.size;
         positive("cell.size[0]", w)?;
         positive("cell.size[1]", h)?;
-        let min_side = w.min(h);
+        let has_inclusions = validate_geometry(&self.geometry, w, h)?;
+        validate_mesh(&self.mesh, w, h)?;
+        self.validate_materials(has_inclusions)?;
+        validate_solver(&self.solver)?;
+        validate_path(&self.path)
+    }
 
-        let has_inclusions = match &self.geometry {
-            GeometrySpec::Homogeneous => false,
-            GeometrySpec::Random(r) => {
-                validate_random(r, min_side)?;
-                true
-            }
-            GeometrySpec::Explicit(e) => {
-                validate_explicit(e, w, h)?;
-                !e.inclusions.is_empty()
-            }
-            GeometrySpec::Gmsh(g) => {
-                if g.file.trim().is_empty() {
-                    return Err(Error::scene("geometry.file", "must name an .msh file"));
-                }
-                if g.matrix.trim().is_empty() {
-                    return Err(Error::scene(
-                        "geometry.matrix",
-                        "must name a physical group",
-                    ));
-                }
-                if g.inclusions.iter().any(|n| n == &g.matrix) {
-                    return Err(Error::scene(
-                        "geometry.inclusions",
-                        format!("group `{}` is also the matrix group", g.matrix),
-                    ));
-                }
-                true
-            }
-            GeometrySpec::StraightInterface(s) => {
-                if !(s.x.is_finite() && s.x > 0.0 && s.x < w) {
-                    return Err(Error::scene(
-                        "geometry.x",
-                        format!(
-                            "the interface must cut the cell: 0 < x < {w} (cell.size[0]), got {}",
-                            s.x
-                        ),
-                    ));
-                }
-                true
-            }
-        };
-
-        let m = &self.mesh;
-        positive("mesh.size", m.size)?;
-        if m.size > min_side {
-            return Err(Error::scene(
-                "mesh.size",
-                format!("{} is larger than the cell side {min_side}", m.size),
-            ));
-        }
-        let h_itz = m.interface_size.unwrap_or(m.size);
-        positive("mesh.interface_size", h_itz)?;
-        let estimate = 2.0 * w * h / (0.5 * 3f64.sqrt() * m.size.min(h_itz).powi(2));
-        if estimate > MAX_TRIANGLES as f64 {
-            return Err(Error::scene(
-                "mesh.size",
-                format!(
-                    "would give about {estimate:.0} triangles, more than the limit {MAX_TRIANGLES}"
-                ),
-            ));
-        }
-        if !(20.0..=30.0).contains(&m.min_angle) {
-            return Err(Error::scene(
-                "mesh.min_angle",
-                format!("must lie in [20, 30] degrees, got {}", m.min_angle),
-            ));
-        }
-
+    /// The materials and the effects that need them; `has_inclusions`: the geometry has
+    /// inclusions.
+    fn validate_materials(&self, has_inclusions: bool) -> Result<()> {
         check_elastic("materials.matrix", &self.materials.matrix)?;
         match (&self.materials.aggregate, has_inclusions) {
             (Some(a), _) => check_elastic("materials.aggregate", a)?,
@@ -169,68 +109,154 @@ impl SceneSpec {
                 linear.normal_stiffness,
             )?;
         }
-
-        let s = &self.solver;
-        positive("solver.tolerance", s.tolerance)?;
-        if s.tolerance >= 1.0 {
-            return Err(Error::scene(
-                "solver.tolerance",
-                "must be below 1 (relative residual)",
-            ));
-        }
-        if s.max_iterations == 0 || s.max_iterations > 1000 {
-            return Err(Error::scene(
-                "solver.max_iterations",
-                "must lie in 1..=1000",
-            ));
-        }
-        if s.max_secant_iterations > 10_000 {
-            return Err(Error::scene(
-                "solver.max_secant_iterations",
-                "must be at most 10000",
-            ));
-        }
-        if s.max_substep_depth > 20 {
-            return Err(Error::scene(
-                "solver.max_substep_depth",
-                "must be at most 20",
-            ));
-        }
-
-        let mut total: u64 = 0;
-        for (k, seg) in self.path.iter().enumerate() {
-            if seg.increments == 0 || u64::from(seg.increments) > MAX_PATH_INCREMENTS {
-                return Err(Error::scene(
-                    format!("path[{k}].increments"),
-                    format!("must lie in 1..={MAX_PATH_INCREMENTS}"),
-                ));
-            }
-            total += u64::from(seg.increments);
-            if total > MAX_PATH_INCREMENTS {
-                return Err(Error::scene(
-                    format!("path[{k}].increments"),
-                    format!(
-                        "the path's segments up to this one add up to {total} increments, more \
-                         than the limit {MAX_PATH_INCREMENTS} for a whole path"
-                    ),
-                ));
-            }
-            if seg
-                .to
-                .iter()
-                .any(|v| !v.is_finite() || v.abs() > MAX_STRAIN)
-            {
-                return Err(Error::scene(
-                    format!("path[{k}].to"),
-                    format!(
-                        "strain components must be finite and at most {} in magnitude",
-                        MAX_STRAIN
-                    ),
-                ));
-            }
-        }
         Ok(())
     }
+}
+
+/// The geometry of a `w` x `h` cell; returns whether it has inclusions.
+fn validate_geometry(geometry: &GeometrySpec, w: f64, h: f64) -> Result<bool> {
+    match geometry {
+        GeometrySpec::Homogeneous => Ok(false),
+        GeometrySpec::Random(r) => {
+            validate_random(r, w.min(h))?;
+            Ok(true)
+        }
+        GeometrySpec::Explicit(e) => {
+            validate_explicit(e, w, h)?;
+            Ok(!e.inclusions.is_empty())
+        }
+        GeometrySpec::Gmsh(g) => {
+            validate_gmsh(g)?;
+            Ok(true)
+        }
+        GeometrySpec::StraightInterface(s) => {
+            if !(s.x.is_finite() && s.x > 0.0 && s.x < w) {
+                return Err(Error::scene(
+                    "geometry.x",
+                    format!(
+                        "the interface must cut the cell: 0 < x < {w} (cell.size[0]), got {}",
+                        s.x
+                    ),
+                ));
+            }
+            Ok(true)
+        }
+    }
+}
+
+fn validate_gmsh(g: &GmshSpec) -> Result<()> {
+    if g.file.trim().is_empty() {
+        return Err(Error::scene("geometry.file", "must name an .msh file"));
+    }
+    if g.matrix.trim().is_empty() {
+        return Err(Error::scene(
+            "geometry.matrix",
+            "must name a physical group",
+        ));
+    }
+    if g.inclusions.iter().any(|n| n == &g.matrix) {
+        return Err(Error::scene(
+            "geometry.inclusions",
+            format!("group `{}` is also the matrix group", g.matrix),
+        ));
+    }
+    Ok(())
+}
+
+/// The mesh sizes and angle of a `w` x `h` cell, and the triangle count they give.
+fn validate_mesh(m: &MeshSpec, w: f64, h: f64) -> Result<()> {
+    let min_side = w.min(h);
+    positive("mesh.size", m.size)?;
+    if m.size > min_side {
+        return Err(Error::scene(
+            "mesh.size",
+            format!("{} is larger than the cell side {min_side}", m.size),
+        ));
+    }
+    let h_itz = m.interface_size.unwrap_or(m.size);
+    positive("mesh.interface_size", h_itz)?;
+    let estimate = 2.0 * w * h / (0.5 * 3f64.sqrt() * m.size.min(h_itz).powi(2));
+    if estimate > MAX_TRIANGLES as f64 {
+        return Err(Error::scene(
+            "mesh.size",
+            format!(
+                "would give about {estimate:.0} triangles, more than the limit {MAX_TRIANGLES}"
+            ),
+        ));
+    }
+    if !(20.0..=30.0).contains(&m.min_angle) {
+        return Err(Error::scene(
+            "mesh.min_angle",
+            format!("must lie in [20, 30] degrees, got {}", m.min_angle),
+        ));
+    }
+    Ok(())
+}
+
+fn validate_solver(s: &SolverSpec) -> Result<()> {
+    positive("solver.tolerance", s.tolerance)?;
+    if s.tolerance >= 1.0 {
+        return Err(Error::scene(
+            "solver.tolerance",
+            "must be below 1 (relative residual)",
+        ));
+    }
+    if s.max_iterations == 0 || s.max_iterations > 1000 {
+        return Err(Error::scene(
+            "solver.max_iterations",
+            "must lie in 1..=1000",
+        ));
+    }
+    if s.max_secant_iterations > 10_000 {
+        return Err(Error::scene(
+            "solver.max_secant_iterations",
+            "must be at most 10000",
+        ));
+    }
+    if s.max_substep_depth > 20 {
+        return Err(Error::scene(
+            "solver.max_substep_depth",
+            "must be at most 20",
+        ));
+    }
+    Ok(())
+}
+
+/// The increments of each segment and of the whole path, and the strains it reaches.
+fn validate_path(path: &[PathSegment]) -> Result<()> {
+    let mut total: u64 = 0;
+    for (k, seg) in path.iter().enumerate() {
+        if seg.increments == 0 || u64::from(seg.increments) > MAX_PATH_INCREMENTS {
+            return Err(Error::scene(
+                format!("path[{k}].increments"),
+                format!("must lie in 1..={MAX_PATH_INCREMENTS}"),
+            ));
+        }
+        total += u64::from(seg.increments);
+        if total > MAX_PATH_INCREMENTS {
+            return Err(Error::scene(
+                format!("path[{k}].increments"),
+                format!(
+                    "the path's segments up to this one add up to {total} increments, more \
+                     than the limit {MAX_PATH_INCREMENTS} for a whole path"
+                ),
+            ));
+        }
+        if seg
+            .to
+            .iter()
+            .any(|v| !v.is_finite() || v.abs() > MAX_STRAIN)
+        {
+            return Err(Error::scene(
+                format!("path[{k}].to"),
+                format!(
+                    "strain components must be finite and at most {} in magnitude",
+                    MAX_STRAIN
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn validate_itz(itz: &ItzSpec) -> Result<()> {
