@@ -19,14 +19,19 @@
 //!
 //! `model` is the edge where the scene schema becomes the numerical modules' own types
 //! (`model::from_scene`); no numerical module reads `scene`.
+//!
+//! `unsafe` code is denied everywhere but in [`ffi`], the C boundary.
 
-pub mod assembly;
+#![deny(unsafe_code)]
+
+pub(crate) mod assembly;
 pub mod constraint;
 pub mod element;
 pub mod error;
+#[allow(unsafe_code)]
 pub mod ffi;
 pub mod geometry;
-pub mod homogenization;
+pub(crate) mod homogenization;
 pub mod host;
 pub mod interface;
 pub mod io;

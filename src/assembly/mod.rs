@@ -3,5 +3,4 @@
 mod discretization;
 mod pattern;
 
-pub use discretization::{BulkElement, Discretization, DiscretizationSpec, SystemEvaluation};
-pub use pattern::{Pattern, NO_SLOT};
+pub use discretization::{Discretization, DiscretizationSpec, SystemEvaluation};

@@ -208,11 +208,17 @@ impl Args {
 /// - `PROPS(1..5)` override `materials.itz.sigma_c`, `materials.itz.delta_c`,
 ///   `geometry.seed`, `materials.matrix.young`, `materials.aggregate.young` when non-zero;
 ///   `PROPS(6)` = 1 returns the elastic tangent instead of the consistent one;
-/// - instances live in the library per (`NOEL`, `NPT`); a new increment (`KSTEP`/`KINC`
-///   changed or `TIME(2)` advanced) commits the last trial, a cut-back (same increment
-///   after a failure or with a smaller `DTIME`) reverts;
-/// - outputs: `STRESS`, `DDSDDE` (`NTENS` x `NTENS`, column-major), `STATEV(1..3)` when
-///   `NSTATV` allows (point id, RVE iterations, sub-steps; never read back); on failure
+/// - the state: with `NSTATV` >= the scene's `umat_nstatv` (`rve info`), the point's
+///   RVE state is `STATEV(1..umat_nstatv)`, read at every call and written with the
+///   trial (integers below 2^48 with a checksum; all zeros: virgin), and the host owns
+///   it; `STATEV(umat_nstatv+1..+3)` get the mirrors (point id, RVE iterations,
+///   sub-steps). With a smaller `NSTATV` the state lives in the library per (`NOEL`,
+///   `NPT`): a new increment (`KSTEP`/`KINC` changed or `TIME(2)` advanced) commits the
+///   last trial, a cut-back (same increment after a failure or with a smaller `DTIME`)
+///   reverts, `KSTEP`/`TIME(2)` going back restarts the point from virgin, and
+///   `STATEV(1..3)` get the mirrors;
+/// - outputs: `STRESS`, `DDSDDE` (`NTENS` x `NTENS`, column-major), `STATEV`; on failure
+///   (a corrupted `STATEV` among the reasons)
 ///   `PNEWDT` < 1, a message in `rve_last_error`, `STRESS` untouched, and a line on
 ///   stderr the first time the process meets the reason (the material and the error's
 ///   text up to its numbers: a layout the RVE cannot answer prints one line, not one per
