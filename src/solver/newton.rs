@@ -123,123 +123,235 @@ pub(super) fn newton(
     mode: Mode,
     evaluated: bool,
 ) -> Result<u32, Failure> {
-    let reference = problem.reference(strain);
-    let tolerance = settings.tolerance * reference;
-    let (max_iterations, mut kind) = match mode {
-        Mode::Newton | Mode::NewtonUntilStagnant => {
-            (settings.max_iterations, TangentKind::Consistent)
-        }
-        Mode::SecantThenNewton => (settings.max_secant_iterations, TangentKind::Secant),
-    };
-    ws.factorization.invalidate();
-    ws.residuals.clear();
-    ws.branch_signatures.clear();
-    if !evaluated {
-        contact::restore(ws);
-    }
-    if !(evaluated && kind == TangentKind::Consistent) {
-        problem.evaluate(x, strain, kind, ws);
-    }
-    // The contact status of the first iteration (see `contact`); pinned points keep
-    // theirs.
-    if contact::update(problem, x, false, ws) > 0 {
-        problem.evaluate(x, strain, kind, ws);
-    }
-    let mut rnorm = norm(&ws.current.r);
-    let mut iteration = 0u32;
-    let mut chord = false;
-    // The iteration at which pinned points were released at a converged iterate.
-    let mut released: Option<u32> = None;
-    // The interface branches of the iterate whose tangent is factorized.
-    let mut factored_branches = 0u64;
+    let mut run = NewtonLoop::start(problem, settings, strain, x, ws, mode, evaluated);
     loop {
+        run.record();
+        if !run.rnorm.is_finite() && run.released.is_none() {
+            return Err(Failure::NonFinite);
+        }
+        if run.rnorm <= run.tolerance {
+            if run.released.is_none() && contact::release_pinned(problem, run.x, run.ws) {
+                run.release();
+                continue;
+            }
+            return Ok(run.converged());
+        }
+        if run.out_of_iterations() {
+            return run.give_up();
+        }
+        run.iterate()?;
+    }
+}
+
+/// The state of one [`newton`] loop between its iterations.
+struct NewtonLoop<'a, 'p> {
+    problem: &'a Problem<'p>,
+    settings: &'a Settings,
+    strain: &'a Strain,
+    /// The iterate.
+    x: &'a mut [f64],
+    ws: &'a mut Workspace,
+    mode: Mode,
+    reference: f64,
+    /// `settings.tolerance * reference`, the convergence test on `||R||`.
+    tolerance: f64,
+    max_iterations: u32,
+    /// The matrix of the iterations: secant or consistent.
+    kind: TangentKind,
+    /// `||R||` at the iterate.
+    rnorm: f64,
+    /// Corrections so far.
+    iteration: u32,
+    /// Whether the next correction reuses the factorization (see "Chord corrections").
+    chord: bool,
+    /// The iteration at which pinned points were released at a converged iterate.
+    released: Option<u32>,
+    /// The interface branches of the iterate whose tangent is factorized.
+    factored_branches: u64,
+}
+
+impl<'a, 'p> NewtonLoop<'a, 'p> {
+    /// Evaluates the start iterate `x` (unless `evaluated` already did with the
+    /// consistent tangent) with the contact status of the first iteration.
+    #[allow(clippy::too_many_arguments)]
+    fn start(
+        problem: &'a Problem<'p>,
+        settings: &'a Settings,
+        strain: &'a Strain,
+        x: &'a mut [f64],
+        ws: &'a mut Workspace,
+        mode: Mode,
+        evaluated: bool,
+    ) -> Self {
+        let reference = problem.reference(strain);
+        let tolerance = settings.tolerance * reference;
+        let (max_iterations, kind) = match mode {
+            Mode::Newton | Mode::NewtonUntilStagnant => {
+                (settings.max_iterations, TangentKind::Consistent)
+            }
+            Mode::SecantThenNewton => (settings.max_secant_iterations, TangentKind::Secant),
+        };
+        ws.factorization.invalidate();
+        ws.residuals.clear();
+        ws.branch_signatures.clear();
+        if !evaluated {
+            contact::restore(ws);
+        }
+        if !(evaluated && kind == TangentKind::Consistent) {
+            problem.evaluate(x, strain, kind, ws);
+        }
+        // The contact status of the first iteration (see `contact`); pinned points keep
+        // theirs.
+        if contact::update(problem, x, false, ws) > 0 {
+            problem.evaluate(x, strain, kind, ws);
+        }
+        let rnorm = norm(&ws.current.r);
+        NewtonLoop {
+            problem,
+            settings,
+            strain,
+            x,
+            ws,
+            mode,
+            reference,
+            tolerance,
+            max_iterations,
+            kind,
+            rnorm,
+            iteration: 0,
+            chord: false,
+            released: None,
+            factored_branches: 0,
+        }
+    }
+
+    /// Keeps the relative residual and branch set of the iterate (as long as
+    /// `ws.residuals` has room).
+    fn record(&mut self) {
+        let ws = &mut *self.ws;
         if ws.residuals.len() < ws.residuals.capacity() {
-            ws.residuals.push(rnorm / reference);
+            ws.residuals.push(self.rnorm / self.reference);
             ws.branch_signatures
                 .push(ws.current.counts.branch_signature);
         }
-        if !rnorm.is_finite() && released.is_none() {
-            return Err(Failure::NonFinite);
+    }
+
+    /// Converged with points pinned against their gap, now released: look once for an
+    /// equilibrium with their gaps' status, from here.
+    fn release(&mut self) {
+        self.ws.pinned_x.copy_from_slice(self.x);
+        self.released = Some(self.iteration);
+        self.problem
+            .evaluate(self.x, self.strain, self.kind, self.ws);
+        self.rnorm = norm(&self.ws.current.r);
+        self.chord = false;
+        self.ws.factorization.invalidate();
+    }
+
+    /// The converged iterate: with the consistent tangent in `ws.current`; returns the
+    /// corrections.
+    fn converged(&mut self) -> u32 {
+        if self.kind == TangentKind::Secant {
+            // Converged on secant matrices: the tangent needs the consistent one.
+            self.problem
+                .evaluate(self.x, self.strain, TangentKind::Consistent, self.ws);
+            self.ws.factorization.invalidate();
         }
-        if rnorm <= tolerance {
-            if released.is_none() && contact::release_pinned(problem, x, ws) {
-                // Converged with points pinned against their gap: look once for an
-                // equilibrium with their gaps' status, from here.
-                ws.pinned_x.copy_from_slice(x);
-                released = Some(iteration);
-                problem.evaluate(x, strain, kind, ws);
-                rnorm = norm(&ws.current.r);
-                chord = false;
-                ws.factorization.invalidate();
-                continue;
-            }
-            if kind == TangentKind::Secant {
-                // Converged on secant matrices: the tangent needs the consistent one.
-                problem.evaluate(x, strain, TangentKind::Consistent, ws);
-                ws.factorization.invalidate();
-            }
-            return Ok(iteration);
-        }
-        let out_of_budget =
-            released.is_some_and(|r| iteration >= r + RELEASE_BUDGET) || !rnorm.is_finite();
-        if iteration >= max_iterations
+        self.iteration
+    }
+
+    /// Whether the loop stops unconverged: out of iterations, out of the release budget,
+    /// or (in [`Mode::NewtonUntilStagnant`]) stagnant or cycling.
+    fn out_of_iterations(&self) -> bool {
+        let out_of_budget = self
+            .released
+            .is_some_and(|r| self.iteration >= r + RELEASE_BUDGET)
+            || !self.rnorm.is_finite();
+        self.iteration >= self.max_iterations
             || out_of_budget
-            || (mode == Mode::NewtonUntilStagnant && (stagnant(ws) || cycling(ws)))
-        {
-            if released.is_some() {
-                // No equilibrium with the gaps' status found: back to the pinned one.
-                x.copy_from_slice(&ws.pinned_x);
-                contact::restore_saved(ws);
-                problem.evaluate(x, strain, TangentKind::Consistent, ws);
-                ws.factorization.invalidate();
-                return Ok(iteration);
-            }
-            return Err(Failure::NotConverged {
-                residual: rnorm,
-                reference,
-            });
+            || (self.mode == Mode::NewtonUntilStagnant && (stagnant(self.ws) || cycling(self.ws)))
+    }
+
+    /// The end of an unconverged loop: the pinned equilibrium if points were released
+    /// at one, else the failure.
+    fn give_up(&mut self) -> Result<u32, Failure> {
+        if self.released.is_some() {
+            // No equilibrium with the gaps' status found: back to the pinned one.
+            self.x.copy_from_slice(&self.ws.pinned_x);
+            contact::restore_saved(self.ws);
+            self.problem
+                .evaluate(self.x, self.strain, TangentKind::Consistent, self.ws);
+            self.ws.factorization.invalidate();
+            return Ok(self.iteration);
         }
-        if correction(problem, kind, chord, ws)? {
-            factored_branches = ws.current.counts.branch_signature;
+        Err(Failure::NotConverged {
+            residual: self.rnorm,
+            reference: self.reference,
+        })
+    }
+
+    /// One correction: solve, line search (consistent) or full step (secant), the
+    /// contact status of the next iteration, the matrix of the next iteration and whether
+    /// it is a chord step.
+    fn iterate(&mut self) -> Result<(), Failure> {
+        let (problem, strain, kind) = (self.problem, self.strain, self.kind);
+        if correction(problem, kind, self.chord, self.ws)? {
+            self.factored_branches = self.ws.current.counts.branch_signature;
         }
-        iteration += 1;
+        self.iteration += 1;
         let new_norm = if kind == TangentKind::Consistent {
-            line_search(problem, strain, x, rnorm, settings.line_search, ws)
+            line_search(
+                problem,
+                strain,
+                self.x,
+                self.rnorm,
+                self.settings.line_search,
+                self.ws,
+            )
         } else {
-            step(problem, strain, x, 1.0, kind, ws);
-            norm(&ws.candidate.r)
+            step(problem, strain, self.x, 1.0, kind, self.ws);
+            norm(&self.ws.candidate.r)
         };
-        x.copy_from_slice(&ws.x_try);
-        accept_candidate(ws);
+        self.x.copy_from_slice(&self.ws.x_try);
+        accept_candidate(self.ws);
         // The contact status of the next iteration.
-        let release = iteration >= PINNED_CORRECTIONS;
-        let new_norm = if contact::update(problem, x, release, ws) > 0 {
-            problem.evaluate(x, strain, kind, ws);
-            norm(&ws.current.r)
+        let release = self.iteration >= PINNED_CORRECTIONS;
+        let new_norm = if contact::update(problem, self.x, release, self.ws) > 0 {
+            problem.evaluate(self.x, strain, kind, self.ws);
+            norm(&self.ws.current.r)
         } else {
             new_norm
         };
-        if mode == Mode::SecantThenNewton {
-            let wanted = if new_norm <= SECANT_HANDOVER * tolerance {
-                TangentKind::Consistent
-            } else if kind == TangentKind::Consistent && new_norm > 10.0 * rnorm {
-                TangentKind::Secant
-            } else {
-                kind
-            };
-            if wanted != kind {
-                kind = wanted;
-                problem.evaluate(x, strain, kind, ws);
-            }
+        if self.mode == Mode::SecantThenNewton {
+            self.switch_matrix(new_norm);
         }
         // A correction that contracted the residual this much, with no interface point
         // changing branch since the factorization, leaves the tangent almost unchanged:
         // the next one reuses the factorization.
-        chord = settings.reuse_factorization
-            && kind == TangentKind::Consistent
-            && new_norm <= CHORD_CONTRACTION * rnorm
-            && ws.current.counts.branch_signature == factored_branches;
-        rnorm = new_norm;
+        self.chord = self.settings.reuse_factorization
+            && self.kind == TangentKind::Consistent
+            && new_norm <= CHORD_CONTRACTION * self.rnorm
+            && self.ws.current.counts.branch_signature == self.factored_branches;
+        self.rnorm = new_norm;
+        Ok(())
+    }
+
+    /// [`Mode::SecantThenNewton`]: consistent Newton below [`SECANT_HANDOVER`] times the
+    /// tolerance, back to secant if Newton made the residual grow tenfold (`new_norm`
+    /// against `rnorm`); re-evaluates the iterate on a change.
+    fn switch_matrix(&mut self, new_norm: f64) {
+        let kind = self.kind;
+        let wanted = if new_norm <= SECANT_HANDOVER * self.tolerance {
+            TangentKind::Consistent
+        } else if kind == TangentKind::Consistent && new_norm > 10.0 * self.rnorm {
+            TangentKind::Secant
+        } else {
+            kind
+        };
+        if wanted != kind {
+            self.kind = wanted;
+            self.problem.evaluate(self.x, self.strain, wanted, self.ws);
+        }
     }
 }
 
