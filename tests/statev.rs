@@ -126,6 +126,15 @@ fn restart_second_analysis_and_readded_element_follow_statev() {
         let half = steps / 2;
         let table = umat();
         let (whole, end) = run(&table, cmname, 1, 0..steps, vec![0.0; n + 3]);
+        // Implicit: each increment's state is rebuilt from its values once; IMPL-EX
+        // commits the trial the host kept (the same answers), rebuilding only the virgin.
+        let loads = table.stats().loads;
+        let expected = if cmname.ends_with("implex") {
+            1
+        } else {
+            steps as u64
+        };
+        assert_eq!(loads, expected, "{cmname}: states rebuilt");
         // A restart: the first half, STATEV through text, the second half in a new table.
         let (first, middle) = run(&umat(), cmname, 1, 0..half, vec![0.0; n + 3]);
         let (second, restarted_end) =

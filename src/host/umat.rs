@@ -75,7 +75,7 @@ use super::material::{Material, SearchPath, TangentChoice};
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
-use crate::solver::Answer;
+use crate::solver::{Answer, Integration};
 use crate::state::statev;
 
 /// Printed once per process when an increment's answer depends on its size.
@@ -229,6 +229,8 @@ impl Increment {
 
 /// Printed once per process: a table point restarted from virgin.
 static BACKWARDS_NOTE: std::sync::Once = std::sync::Once::new();
+/// Printed once per process: a virgin `STATEV` at a strained point.
+static VIRGIN_NOTE: std::sync::Once = std::sync::Once::new();
 /// Printed once per process: `NSTATV` too small for `STATEV` mode.
 static TABLE_NOTE: std::sync::Once = std::sync::Once::new();
 
@@ -249,9 +251,11 @@ struct Point {
     last: Option<([f64; 3], Response)>,
     /// The last call failed.
     failed: bool,
-    /// `STATEV` mode: the values the committed state was rebuilt from (see
-    /// [`Umat::statev_answer`]); `None` in table mode and before the first call.
-    core_values: Option<Vec<u64>>,
+    /// `STATEV` mode: the values the committed state stands for (see
+    /// [`Umat::statev_answer`]), and the values written for the pending trial; `None` in
+    /// table mode and before the first call.
+    core_values: Option<Vec<f64>>,
+    trial_values: Option<Vec<f64>>,
 }
 
 impl Point {
@@ -267,6 +271,7 @@ impl Point {
             last: None,
             failed: false,
             core_values: None,
+            trial_values: None,
         }
     }
 
@@ -498,18 +503,37 @@ impl Umat {
     ) -> crate::Result<(Response, bool)> {
         let strain = call_strain(p, c)?;
         let model = p.material.model.clone();
-        let bits: Vec<u64> = statev.iter().map(|v| v.to_bits()).collect();
-        if p.core_values.as_ref() != Some(&bits) {
+        let same = |kept: &Option<Vec<f64>>| {
+            kept.as_ref().is_some_and(|k| {
+                k.iter()
+                    .map(|v| v.to_bits())
+                    .eq(statev.iter().map(|v| v.to_bits()))
+            })
+        };
+        if !same(&p.core_values) {
             p.core_values = None;
-            let core = statev::read(statev, model.state_sizes(), model.interface_points())?;
-            with_workspace(&model, |ws| p.instance.load_core(core.as_ref(), ws))?;
-            p.core_values = Some(bits);
-            self.loads.fetch_add(1, Ordering::Relaxed);
+            let implex = model.solver.integration == Integration::Implex;
+            // IMPL-EX: the host kept the point's last trial, which is the state those values
+            // expand to plus the step kept for carrying over (whose answers are the same
+            // bit for bit): it is committed instead of rebuilt.
+            if !(implex && same(&p.trial_values) && p.instance.commit().is_ok()) {
+                let core = statev::read(statev, model.state_sizes(), model.interface_points())?;
+                if core.is_none() && c.stran.iter().any(|&e| e != 0.0) {
+                    virgin_note(c);
+                }
+                with_workspace(&model, |ws| p.instance.load_core(core.as_ref(), ws))?;
+                self.loads.fetch_add(1, Ordering::Relaxed);
+            }
+            p.core_values = Some(statev.to_vec());
         }
+        p.trial_values = None;
         let request = p.material.tangent_request();
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         })?;
+        let mut written = vec![0.0; statev.len()];
+        statev::write(&p.instance.trial_core()?, model.state_sizes(), &mut written)?;
+        p.trial_values = Some(written);
         let solved = r.report.answer != Answer::Repeated;
         let counter = if solved { &self.solves } else { &self.repeats };
         counter.fetch_add(1, Ordering::Relaxed);
@@ -646,6 +670,7 @@ fn lock<'p>(point: &'p PointRef, c: &UmatCall) -> crate::Result<MutexGuard<'p, P
             p.last = None;
             p.failed = true;
             p.core_values = None;
+            p.trial_values = None;
             Ok(p)
         }
     }
@@ -657,6 +682,19 @@ fn call_strain(p: &Point, c: &UmatCall) -> crate::Result<[f64; 3]> {
     h.check_model(&p.material.model)?;
     let total: Vec<f64> = c.stran.iter().zip(c.dstran).map(|(a, b)| a + b).collect();
     h.rve_strain(&total)
+}
+
+/// Says once per process that a point with a strain at the start of its increment came
+/// with a virgin `STATEV`: the host did not carry the state (a CalculiX 2.20 restart
+/// without a contact pair, an element re-added with its strain).
+fn virgin_note(c: &UmatCall) {
+    warn_once(&VIRGIN_NOTE, || {
+        format!(
+            "mesorve: element {}, point {}: STATEV is all zeros (a virgin RVE) but STRAN is \
+             not: the host did not carry this point's state (printed once)",
+            c.noel, c.npt
+        )
+    });
 }
 
 /// Says once per process that `STATEV` is too short to hold the state.
@@ -692,14 +730,12 @@ fn write_outputs(
     let h = c.hypothesis;
     h.host_stress(&plane, out.stress)?;
     h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)?;
-    let mirrors_at = match statev_len {
-        Some(len) => {
-            let core = p.instance.trial_core()?;
-            let sizes = material.model.state_sizes();
-            statev::write(&core, sizes, &mut out.statev[..len])?;
+    let mirrors_at = match (statev_len, &p.trial_values) {
+        (Some(len), Some(values)) => {
+            out.statev[..len].copy_from_slice(values);
             len
         }
-        None => 0,
+        _ => 0,
     };
     let mirrors = [
         p.id as f64,
