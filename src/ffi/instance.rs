@@ -93,7 +93,7 @@ impl RveInfo {
             iterations: r.report.iterations,
             substeps: r.report.substeps,
             factorizations: r.report.factorizations,
-            reliability: if r.report.substeps > 1 || r.report.step_too_large {
+            reliability: if r.report.substepped() {
                 RveReliability::Substepped as i32
             } else {
                 RveReliability::Reliable as i32
@@ -123,17 +123,14 @@ pub(crate) fn update_entry(
     request: RveTangentRequest,
 ) -> FfiResult<Response> {
     let mut instance = entry.lock()?;
-    let solve_request = match request {
+    let request = match request {
         RveTangentRequest::Consistent => TangentRequest::Consistent,
-        RveTangentRequest::None | RveTangentRequest::Elastic => TangentRequest::None,
+        RveTangentRequest::None => TangentRequest::None,
+        RveTangentRequest::Elastic => TangentRequest::Elastic,
     };
-    let mut r = with_workspace(&entry.model, |ws| {
-        instance.update_timed(strain, dtime, ws, solve_request)
-    })?;
-    if request == RveTangentRequest::Elastic {
-        r.tangent = entry.model.elastic_tangent;
-    }
-    Ok(r)
+    Ok(with_workspace(&entry.model, |ws| {
+        instance.update_timed(strain, dtime, ws, request)
+    })?)
 }
 
 fn new_instance(model: Arc<Model>, handle: &mut RveHandle) -> FfiResult {

@@ -138,21 +138,12 @@ pub fn scene_name(cmname: &str) -> Result<Option<&str>> {
     Ok(Some(scene))
 }
 
-/// The tangent a material returns in `DDSDDE`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TangentChoice {
-    /// The consistent tangent of the converged RVE (eq. 18).
-    Consistent,
-    /// The elastic tangent of the virgin RVE: no tangent solve; the host's Newton
-    /// converges linearly.
-    Elastic,
-}
-
 /// A resolved material: its model, the tangent it returns and its elastic response.
 #[derive(Debug)]
 pub struct Material {
     pub model: Arc<Model>,
-    pub tangent: TangentChoice,
+    /// The tangent it returns in `DDSDDE`: `Consistent` or `Elastic` (`PROPS(6)`).
+    pub tangent: TangentRequest,
     /// The virgin RVE's tangent and `d s_zz / d eps` (stress and `s_zz` zero).
     pub elastic: PlaneResponse,
     /// Where the scene came from and what `PROPS` overrode, for messages.
@@ -160,15 +151,6 @@ pub struct Material {
 }
 
 impl Material {
-    /// What the RVE is asked for: the consistent tangent, or none when the host gets the
-    /// elastic one.
-    pub fn tangent_request(&self) -> TangentRequest {
-        match self.tangent {
-            TangentChoice::Consistent => TangentRequest::Consistent,
-            TangentChoice::Elastic => TangentRequest::None,
-        }
-    }
-
     /// Resolves a material name and its constants (see the module documentation).
     pub fn resolve(cmname: &str, props: &[f64], path: &SearchPath) -> Result<Material> {
         let overrides = overrides(props)?;
@@ -200,12 +182,11 @@ impl Material {
             let edited = apply_overrides(&text, &overrides)?;
             cache::model_for_text(&edited, base.as_deref())?
         };
-        let x_el: Vec<f64> = model.elastic_sensitivity.iter().map(|v| -v).collect();
         let elastic = PlaneResponse {
             stress: [0.0; 3],
             tangent: model.elastic_tangent,
             s_zz: 0.0,
-            s_zz_tangent: model.hom.szz_tangent(&x_el),
+            s_zz_tangent: model.elastic_s_zz_tangent,
         };
         Ok(Material {
             model,
@@ -242,10 +223,10 @@ fn overrides(props: &[f64]) -> Result<Vec<(usize, &'static str, f64)>> {
     Ok(out)
 }
 
-fn tangent_choice(props: &[f64]) -> Result<TangentChoice> {
+fn tangent_choice(props: &[f64]) -> Result<TangentRequest> {
     match props.get(PROPS_TANGENT - 1).copied().unwrap_or(0.0) {
-        0.0 => Ok(TangentChoice::Consistent),
-        1.0 => Ok(TangentChoice::Elastic),
+        0.0 => Ok(TangentRequest::Consistent),
+        1.0 => Ok(TangentRequest::Elastic),
         v => Err(Error::scene(
             format!("PROPS({PROPS_TANGENT})"),
             format!("{v}: the tangent is 0 (consistent) or 1 (elastic)"),
@@ -332,14 +313,14 @@ mod tests {
         assert!(e.to_string().contains("PROPS(7)"), "{e}");
         let e = overrides(&[f64::NAN]).unwrap_err();
         assert!(e.to_string().contains("PROPS(1)"), "{e}");
-        assert_eq!(tangent_choice(&[]).unwrap(), TangentChoice::Consistent);
+        assert_eq!(tangent_choice(&[]).unwrap(), TangentRequest::Consistent);
         assert_eq!(
             tangent_choice(&[0.0; 6]).unwrap(),
-            TangentChoice::Consistent
+            TangentRequest::Consistent
         );
         let mut p = [0.0; 6];
         p[5] = 1.0;
-        assert_eq!(tangent_choice(&p).unwrap(), TangentChoice::Elastic);
+        assert_eq!(tangent_choice(&p).unwrap(), TangentRequest::Elastic);
         p[5] = 0.5;
         assert!(tangent_choice(&p)
             .unwrap_err()

@@ -14,5 +14,5 @@ pub mod material;
 pub mod umat;
 
 pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};
-pub use material::{Material, SearchPath, TangentChoice, SCENE_PATH_VAR};
+pub use material::{Material, SearchPath, SCENE_PATH_VAR};
 pub use umat::{global, Outcome, Umat, UmatCall, UmatFailure, UmatOutputs, UmatStats};

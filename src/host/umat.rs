@@ -71,7 +71,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockError};
 
 use super::hypothesis::{Hypothesis, PlaneResponse};
-use super::material::{Material, SearchPath, TangentChoice};
+use super::material::{Material, SearchPath};
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
@@ -481,7 +481,7 @@ impl Umat {
         }
         self.solves.fetch_add(1, Ordering::Relaxed);
         let model = p.material.model.clone();
-        let request = p.material.tangent_request();
+        let request = p.material.tangent;
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         });
@@ -527,7 +527,7 @@ impl Umat {
             p.core_values = Some(statev.to_vec());
         }
         p.trial_values = None;
-        let request = p.material.tangent_request();
+        let request = p.material.tangent;
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         })?;
@@ -722,11 +722,7 @@ fn write_outputs(
     statev_len: Option<usize>,
 ) -> crate::Result<()> {
     let material = &p.material;
-    let mut plane = PlaneResponse::from(r);
-    if material.tangent == TangentChoice::Elastic {
-        plane.tangent = material.elastic.tangent;
-        plane.s_zz_tangent = material.elastic.s_zz_tangent;
-    }
+    let plane = PlaneResponse::from(r);
     let h = c.hypothesis;
     h.host_stress(&plane, out.stress)?;
     h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)?;

@@ -130,11 +130,15 @@ impl Instance {
         }
         self.pending = Pending::Nothing;
         self.last = None;
-        let response = if self.model.solver.integration == Integration::Implex {
+        let mut response = if self.model.solver.integration == Integration::Implex {
             self.implex(strain, dt, ws, request)?
         } else {
             self.implicit(strain, ws, request)?
         };
+        if request == TangentRequest::Elastic {
+            response.tangent = self.model.elastic_tangent;
+            response.s_zz_tangent = self.model.elastic_s_zz_tangent;
+        }
         self.last = Some(LastTrial {
             strain,
             dt,
@@ -192,7 +196,7 @@ impl Instance {
         if reuse {
             self.fast_updates += 1;
         }
-        if request == TangentRequest::None {
+        if request != TangentRequest::Consistent {
             response.tangent = [0.0; 9];
             response.s_zz_tangent = [0.0; 3];
         }

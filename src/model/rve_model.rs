@@ -45,8 +45,9 @@ pub struct Model {
     /// Symbolic LL^T and LU analyses of the pattern.
     pub linear: LinearSolver,
     pub solver: Settings,
-    /// Homogenized tangent of the virgin RVE (row-major).
+    /// Homogenized tangent of the virgin RVE (row-major), and its `s_zz` row.
     pub elastic_tangent: [f64; 9],
+    pub elastic_s_zz_tangent: [f64; 3],
     /// `-K_el^-1 G` of the virgin RVE (n x 3): the solver's predictor.
     pub elastic_sensitivity: Vec<f64>,
 }
@@ -102,6 +103,7 @@ impl Model {
             linear,
             solver: solver_settings(&spec.solver),
             elastic_tangent: [0.0; 9],
+            elastic_s_zz_tangent: [0.0; 3],
             elastic_sensitivity: Vec::new(),
         };
         // The virgin tangent: one converged "update" at zero strain.
@@ -116,6 +118,7 @@ impl Model {
             TangentRequest::Consistent,
         )?;
         model.elastic_tangent = response.tangent;
+        model.elastic_s_zz_tangent = response.s_zz_tangent;
         model.elastic_sensitivity = ws.factorization().kg().iter().map(|v| -v).collect();
         Ok(model)
     }
@@ -166,13 +169,13 @@ impl Model {
         let solved = solve_increment(&problem, committed, strain, request, ws, trial)?;
         let tangent = match request {
             TangentRequest::Consistent => self.hom.tangent_from_condensed(&solved.condensed),
-            TangentRequest::None => [0.0; 9],
+            TangentRequest::None | TangentRequest::Elastic => [0.0; 9],
         };
         let (stress, s_zz) = self.hom.stress(&self.disc, &strain, &trial.unknowns);
         // A consistent update leaves X = K^-1 G of the converged state in the workspace.
         let s_zz_tangent = match request {
             TangentRequest::Consistent => self.hom.szz_tangent(ws.factorization().kg()),
-            TangentRequest::None => [0.0; 3],
+            TangentRequest::None | TangentRequest::Elastic => [0.0; 3],
         };
         // A converged residual does not exclude overflow in the tangent or the stress
         // (material constants near the ends of the f64 range): never hand out NaN.
@@ -290,7 +293,7 @@ impl Model {
         let (stress, s_zz) = fast_path::response(linear, &strain);
         let (tangent, s_zz_tangent) = match request {
             TangentRequest::Consistent => (linear.tangent, linear.szz),
-            TangentRequest::None => ([0.0; 9], [0.0; 3]),
+            TangentRequest::None | TangentRequest::Elastic => ([0.0; 9], [0.0; 3]),
         };
         let contact = linear.closed.iter().filter(|&&c| c).count();
         Ok(Some(Response {

@@ -63,6 +63,10 @@ pub enum TangentRequest {
     Consistent,
     /// No tangent: stress only (skips the tangent solve).
     None,
+    /// The elastic tangent of the virgin RVE (`Model::elastic_tangent`): no tangent
+    /// solve; the host's Newton then converges linearly. The solver treats it as `None`;
+    /// `model::Instance` puts the elastic tangent and its `s_zz` row in the response.
+    Elastic,
 }
 
 /// Counters of one update.
@@ -129,6 +133,12 @@ impl IncrementReport {
         } else {
             1.0
         }
+    }
+
+    /// Whether the answer is less reliable than a plain converged increment: it needed
+    /// sub-steps, or it depends on the step (`step_too_large`). MGIS-style reliability.
+    pub fn substepped(&self) -> bool {
+        self.substeps > 1 || self.step_too_large
     }
 }
 
