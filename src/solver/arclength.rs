@@ -194,135 +194,285 @@ pub(super) fn trace(
     ws: &mut Workspace,
     work: &mut Traced,
 ) -> bool {
-    let tolerance = settings.tolerance * reference;
-    problem.load(&line.delta, &mut ws.trace.f);
-    let mut t_a = from;
-    let magnitude = |e: &Strain| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-    let back_limit = -(magnitude(&line.origin) / magnitude(&line.delta) + 1.0);
-    ws.trace.prev.iter_mut().for_each(|v| *v = 0.0);
-    let (mut length, mut first_length) = (0.0, 0.0);
-    let mut cuts = 0;
-    let mut going_forward = true;
-    // Whether `ws.trace.dxf` holds a tangent direction for the arc point `x_a`.
-    let mut direction_ready = false;
-    // Whether a landing from the current arc point has failed.
-    let mut landing_failed = false;
-    // Attempts in a row on arcs under `CRAWL_FRACTION` of the first.
-    let mut crawl = 0u32;
-    // Interface points loading at the arc point `x_a`.
-    let mut point_loading = 0usize;
+    let mut tracer = Tracer::new(
+        problem,
+        settings,
+        line,
+        (from, to),
+        reference,
+        trial,
+        ws,
+        work,
+    );
     for _ in 0..MAX_POINTS {
+        let Some(dxf_norm) = tracer.at_arc_point() else {
+            return false;
+        };
+        let step = tracer.plan(dxf_norm);
+        let converged = match tracer.attempt(&step) {
+            Attempt::Landed => return true,
+            Attempt::Lost => return false,
+            Attempt::Point => true,
+            Attempt::Failed => false,
+        };
+        if !tracer.after_attempt(converged, &step) {
+            return false;
+        }
+    }
+    false
+}
+
+/// How one attempt from an arc point ended.
+enum Attempt {
+    /// Converged at the target: the trace is done.
+    Landed,
+    /// A converged point past the start of the strain history: the path is lost.
+    Lost,
+    /// A new arc point.
+    Point,
+    /// No point (corrector, landing, or a point rejected at a corner).
+    Failed,
+}
+
+/// One attempt from the arc point, as [`Tracer::plan`] sets it.
+struct ArcStep {
+    /// The attempt goes the other way round a corner.
+    reverse: bool,
+    /// The attempt goes forward over a long arc past a corner.
+    jump: bool,
+    /// The arc length before the jump lengthened it.
+    cut_length: f64,
+    /// The predictor's step of `t`.
+    dt_pred: f64,
+}
+
+/// A trace in progress (see [`trace`]): the path, the last arc point `x_a` at `t_a`, and
+/// the arc length and counters that decide the next attempt.
+struct Tracer<'a, 'p> {
+    problem: &'a Problem<'p>,
+    settings: &'a Settings,
+    line: StrainLine,
+    /// The start and target of `t`.
+    from: f64,
+    to: f64,
+    /// The convergence test on `||R||` of the corrector.
+    tolerance: f64,
+    /// A point at `t` below this is back past the start of the strain history.
+    back_limit: f64,
+    trial: &'a mut State,
+    ws: &'a mut Workspace,
+    work: &'a mut Traced,
+    t_a: f64,
+    length: f64,
+    first_length: f64,
+    /// Failed attempts in a row at the arc point.
+    cuts: u32,
+    going_forward: bool,
+    /// Whether `ws.trace.dxf` holds a tangent direction for the arc point `x_a`.
+    direction_ready: bool,
+    /// Whether a landing from the current arc point has failed.
+    landing_failed: bool,
+    /// Attempts in a row on arcs under `CRAWL_FRACTION` of the first.
+    crawl: u32,
+    /// Interface points loading at the arc point `x_a`.
+    point_loading: usize,
+}
+
+impl<'a, 'p> Tracer<'a, 'p> {
+    /// A trace from `trial` at `t = span.0` to `t = span.1`: the load vector `f` of the
+    /// line and the back limit (see "When a trace stops").
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        problem: &'a Problem<'p>,
+        settings: &'a Settings,
+        line: StrainLine,
+        (from, to): (f64, f64),
+        reference: f64,
+        trial: &'a mut State,
+        ws: &'a mut Workspace,
+        work: &'a mut Traced,
+    ) -> Self {
+        let tolerance = settings.tolerance * reference;
+        problem.load(&line.delta, &mut ws.trace.f);
+        let magnitude = |e: &Strain| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        let back_limit = -(magnitude(&line.origin) / magnitude(&line.delta) + 1.0);
+        ws.trace.prev.iter_mut().for_each(|v| *v = 0.0);
+        Tracer {
+            problem,
+            settings,
+            line,
+            from,
+            to,
+            tolerance,
+            back_limit,
+            trial,
+            ws,
+            work,
+            t_a: from,
+            length: 0.0,
+            first_length: 0.0,
+            cuts: 0,
+            going_forward: true,
+            direction_ready: false,
+            landing_failed: false,
+            crawl: 0,
+            point_loading: 0,
+        }
+    }
+
+    /// Starts an attempt from the arc point `trial` (its history, held contact status
+    /// and unknowns `x_a`, and the path direction there if not ready); returns
+    /// `|dx_f|`, or `None` when the path is lost (singular `K`, no direction). The first
+    /// call sets the first arc length.
+    fn at_arc_point(&mut self) -> Option<f64> {
+        let (problem, trial, ws) = (self.problem, &mut *self.trial, &mut *self.ws);
         ws.history_start.copy_from_slice(&trial.history);
         contact::hold_state(problem, trial, ws);
         ws.trace.xa.copy_from_slice(&trial.unknowns);
-        if !direction_ready {
-            if !tangent_at(problem, &line.at(t_a), trial, ws) {
-                return false;
+        if !self.direction_ready {
+            if !tangent_at(problem, &self.line.at(self.t_a), trial, ws) {
+                return None;
             }
-            point_loading = ws.current.counts.loading;
+            self.point_loading = ws.current.counts.loading;
         }
         let dxf_norm = dot(&ws.trace.dxf, &ws.trace.dxf).sqrt();
         if !(dxf_norm.is_finite() && dxf_norm > 0.0) {
-            return false;
+            return None;
         }
-        if length == 0.0 {
+        if self.length == 0.0 {
             // Eight points would cover the rest of the increment on a straight path.
-            length = (to - from) * dxf_norm / 8.0;
-            first_length = length;
+            self.length = (self.to - self.from) * dxf_norm / 8.0;
+            self.first_length = self.length;
         }
+        Some(dxf_norm)
+    }
+
+    /// The next attempt's way, arc length and predictor step, from `|dx_f|`.
+    fn plan(&mut self, dxf_norm: f64) -> ArcStep {
         // Round a corner: once the other way, then once forward over a long arc (see
         // "Corners" in the module docs). `length` has been halved at every cut.
-        let reverse = cuts == CORNER_CUTS;
-        let jump = cuts == CORNER_CUTS + 1;
-        let cut_length = length;
+        let reverse = self.cuts == CORNER_CUTS;
+        let jump = self.cuts == CORNER_CUTS + 1;
+        let cut_length = self.length;
         if jump {
-            length *= CORNER_JUMP * f64::from(1u32 << cuts);
+            self.length *= CORNER_JUMP * f64::from(1u32 << self.cuts);
         }
         let sign = if reverse { -1.0 } else { 1.0 };
-        let mut dt_pred = sign * direction(work.points, &ws.trace) * length / dxf_norm;
-        if landing_failed && t_a + dt_pred >= to && !reverse {
+        let mut dt_pred =
+            sign * direction(self.work.points, &self.ws.trace) * self.length / dxf_norm;
+        if self.landing_failed && self.t_a + dt_pred >= self.to && !reverse {
             // Not the same landing again: an arc step half way to the target.
-            length = 0.5 * (to - t_a) * dxf_norm;
-            dt_pred = 0.5 * (to - t_a);
+            self.length = 0.5 * (self.to - self.t_a) * dxf_norm;
+            dt_pred = 0.5 * (self.to - self.t_a);
         }
-        let converged = if t_a + dt_pred >= to && !reverse {
-            predict_along_tangent(t_a, to, trial, ws);
-            if land(problem, settings, line, to, trial, ws, work) {
-                return true;
+        ArcStep {
+            reverse,
+            jump,
+            cut_length,
+            dt_pred,
+        }
+    }
+
+    /// A landing when `step` would pass the target, else a corrector along `step`.
+    fn attempt(&mut self, step: &ArcStep) -> Attempt {
+        if self.t_a + step.dt_pred >= self.to && !step.reverse {
+            predict_along_tangent(self.t_a, self.to, self.trial, self.ws);
+            if self.land() {
+                return Attempt::Landed;
             }
-            landing_failed = true;
-            false // a failed landing leaves `dxf` alone
-        } else if let Some(t) = correct(
-            problem, tolerance, line, t_a, dt_pred, length, trial, ws, work,
-        ) {
-            let loading = ws.current.counts.loading;
-            if reverse && (loading == 0 || (loading as f64) < CORNER_LOADING * point_loading as f64)
-            {
-                // Back along an elastic branch, not round a corner: a failed attempt.
-                ws.trace.dxf.copy_from_slice(&ws.trace.pred);
-                false
-            } else if t > to {
-                // The path crossed the target between the two arc points: land there from
-                // the interpolation, rather than commit history the step never reaches.
-                interpolate(t_a, t, to, trial, ws);
-                if land(problem, settings, line, to, trial, ws, work) {
-                    return true;
-                }
-                ws.trace.dxf.copy_from_slice(&ws.trace.pred);
-                false
-            } else {
-                point_loading = ws.current.counts.loading;
-                accept_point(&line.at(t), trial, ws);
-                contact::record_held(problem, trial, ws);
-                let forward = t > t_a;
-                if forward != going_forward {
-                    work.limit_points += 1;
-                    going_forward = forward;
-                }
-                if t < back_limit {
-                    return false;
-                }
-                t_a = t;
-                landing_failed = false;
-                work.points += 1;
-                length *= GROWTH;
-                true
+            self.landing_failed = true;
+            return Attempt::Failed; // a failed landing leaves `dxf` alone
+        }
+        match self.correct(step.dt_pred) {
+            Some(t) => self.corrected(t, step.reverse),
+            None => {
+                // The corrector overwrote `dxf`: back to the direction at `x_a`.
+                self.ws.trace.dxf.copy_from_slice(&self.ws.trace.pred);
+                Attempt::Failed
             }
+        }
+    }
+
+    /// What the corrector's converged point at `t` is: no point round a corner
+    /// (`reverse`) where nothing loads any more, a landing when it passed the target,
+    /// else the next arc point.
+    fn corrected(&mut self, t: f64, reverse: bool) -> Attempt {
+        let loading = self.ws.current.counts.loading;
+        if reverse
+            && (loading == 0 || (loading as f64) < CORNER_LOADING * self.point_loading as f64)
+        {
+            // Back along an elastic branch, not round a corner: a failed attempt.
+            self.ws.trace.dxf.copy_from_slice(&self.ws.trace.pred);
+            Attempt::Failed
+        } else if t > self.to {
+            // The path crossed the target between the two arc points: land there from
+            // the interpolation, rather than commit history the step never reaches.
+            interpolate(self.t_a, t, self.to, self.trial, self.ws);
+            if self.land() {
+                return Attempt::Landed;
+            }
+            self.ws.trace.dxf.copy_from_slice(&self.ws.trace.pred);
+            Attempt::Failed
         } else {
-            // The corrector overwrote `dxf`: back to the direction at `x_a`.
-            ws.trace.dxf.copy_from_slice(&ws.trace.pred);
-            false
-        };
+            self.accept(t)
+        }
+    }
+
+    /// Commits the converged point at `t` as the next arc point, counting limit points;
+    /// lost if it lies back past the start of the strain history.
+    fn accept(&mut self, t: f64) -> Attempt {
+        self.point_loading = self.ws.current.counts.loading;
+        accept_point(&self.line.at(t), self.trial, self.ws);
+        contact::record_held(self.problem, self.trial, self.ws);
+        let forward = t > self.t_a;
+        if forward != self.going_forward {
+            self.work.limit_points += 1;
+            self.going_forward = forward;
+        }
+        if t < self.back_limit {
+            return Attempt::Lost;
+        }
+        self.t_a = t;
+        self.landing_failed = false;
+        self.work.points += 1;
+        self.length *= GROWTH;
+        Attempt::Point
+    }
+
+    /// The arc length after an attempt (`converged`: it gave a point): reset cuts after a
+    /// point, else back to `x_a` with half the arc. Returns `false` when the path is lost
+    /// (a crawl, too many cuts, too short an arc).
+    fn after_attempt(&mut self, converged: bool, step: &ArcStep) -> bool {
         // The next predictor's direction: after a converged point, the corrector's last
         // `K^-1 f`, at an iterate within the tolerance of the new point (saves its
         // factorization); after a failed corrector or landing, the one at `x_a` (a landing
         // leaves `dxf` alone).
-        direction_ready = true;
+        self.direction_ready = true;
         // A trace that only creeps on (at a corner of the path where every longer arc
         // fails) is lost as well.
-        crawl = if length < CRAWL_FRACTION * first_length {
-            crawl + 1
+        self.crawl = if self.length < CRAWL_FRACTION * self.first_length {
+            self.crawl + 1
         } else {
             0
         };
-        if crawl > CRAWL_ATTEMPTS {
+        if self.crawl > CRAWL_ATTEMPTS {
             return false;
         }
         if converged {
-            cuts = 0;
+            self.cuts = 0;
         } else {
-            trial.unknowns.copy_from_slice(&ws.trace.xa);
-            if jump {
-                length = cut_length;
+            self.trial.unknowns.copy_from_slice(&self.ws.trace.xa);
+            if step.jump {
+                self.length = step.cut_length;
             }
-            length *= 0.5;
-            cuts += 1;
-            if cuts > MAX_CUTS || length < MIN_LENGTH * first_length {
+            self.length *= 0.5;
+            self.cuts += 1;
+            if self.cuts > MAX_CUTS || self.length < MIN_LENGTH * self.first_length {
                 return false;
             }
         }
+        true
     }
-    false
 }
 
 /// The sign of the next arc step along `dxf`: keep going the way the path went (positive
@@ -383,107 +533,145 @@ fn interpolate(t_a: f64, t: f64, to: f64, trial: &mut State, ws: &Workspace) {
     }
 }
 
-/// Lands on `t = to` under strain control from the prediction in `trial.unknowns`;
-/// returns whether Newton converged there.
-fn land(
-    problem: &Problem,
-    settings: &Settings,
-    line: StrainLine,
-    to: f64,
-    trial: &mut State,
-    ws: &mut Workspace,
-    work: &mut Traced,
-) -> bool {
-    let landing = Settings {
-        max_iterations: MAX_LANDING,
-        ..*settings
-    };
-    let outcome = newton(
-        problem,
-        &landing,
-        &line.at(to),
-        &mut trial.unknowns,
-        ws,
-        Mode::Newton,
-        false,
-    );
-    work.iterations += ws.residuals.len().saturating_sub(1) as u32;
-    outcome.is_ok()
+/// The iterations of one corrector (see [`Tracer::correct`]).
+struct Corrector {
+    /// The predictor's step of `t`: `dt_pred ws.trace.pred` is the normal of the
+    /// constraint plane.
+    dt_pred: f64,
+    /// The `t` of the iterate.
+    t: f64,
+    /// The branch signature and residual of the last iterates (see "When a trace stops").
+    recent: [(u64, f64); CYCLE_WINDOW],
+    /// The iteration at which the points held against their gap were released at a
+    /// converged iterate, and that iterate's `t` (its unknowns are in `ws.pinned_x`).
+    released: Option<(usize, f64)>,
+    iteration: usize,
 }
 
-/// The corrector of one arc step of length `length` from the arc point `ws.trace.xa` at
-/// `t_a`, predicted along `dt_pred ws.trace.dxf`: Newton on the residual and Riks' normal
-/// plane together. Returns the converged `t` (the unknowns are in `trial`), or `None`.
-/// Leaves the predictor direction in `ws.trace.pred`.
-#[allow(clippy::too_many_arguments)]
-fn correct(
-    problem: &Problem,
-    tolerance: f64,
-    line: StrainLine,
-    t_a: f64,
-    dt_pred: f64,
-    length: f64,
-    trial: &mut State,
-    ws: &mut Workspace,
-    work: &mut Traced,
-) -> Option<f64> {
-    // Predictor (its direction stays the normal of the constraint plane).
-    ws.trace.pred.copy_from_slice(&ws.trace.dxf);
-    for (x, (xa, p)) in trial
-        .unknowns
-        .iter_mut()
-        .zip(ws.trace.xa.iter().zip(&ws.trace.pred))
-    {
-        *x = xa + dt_pred * p;
-    }
-    let mut t = t_a + dt_pred;
-    // The branch signature and residual of the last iterates (see "When a trace stops").
-    let mut recent = [(0u64, f64::INFINITY); CYCLE_WINDOW];
-    // The iteration at which the points held against their gap were released at a
-    // converged iterate, and that iterate's `t` (its unknowns are in `ws.pinned_x`).
-    let mut released: Option<(usize, f64)> = None;
-    let mut iteration = 0;
-    loop {
-        problem.evaluate(&trial.unknowns, &line.at(t), TangentKind::Consistent, ws);
-        let rnorm = dot(&ws.current.r, &ws.current.r).sqrt();
-        if rnorm <= tolerance {
-            if released.is_none() && contact::release_opened(problem, &trial.unknowns, ws) {
-                // Converged with points held closed whose gap opened: look once for the
-                // point of this arc with them open, from here (as `newton` does).
-                ws.pinned_x.copy_from_slice(&trial.unknowns);
-                ws.trace.held_dxf.copy_from_slice(&ws.trace.dxf);
-                released = Some((iteration, t));
-                recent = [(0u64, f64::INFINITY); CYCLE_WINDOW];
-                continue;
-            }
-            return Some(t);
-        }
-        let branches = ws.current.counts.branch_signature;
-        let earlier =
-            (1..=CYCLE_WINDOW.min(iteration)).map(|back| recent[(iteration - back) % CYCLE_WINDOW]);
+impl Corrector {
+    /// Whether the corrector gives up at an iterate with branch set `branches` and
+    /// residual norm `rnorm`: its iterates cycle, its budget is spent, or the residual is
+    /// not finite.
+    fn stops(&self, branches: u64, rnorm: f64) -> bool {
+        let iteration = self.iteration;
+        let earlier = (1..=CYCLE_WINDOW.min(iteration))
+            .map(|back| self.recent[(iteration - back) % CYCLE_WINDOW]);
         let cycling = comes_back(earlier, branches, rnorm);
-        let out_of_budget = match released {
+        let out_of_budget = match self.released {
             Some((at, _)) => iteration >= at + RELEASE_BUDGET,
             None => iteration >= MAX_CORRECTOR,
         };
-        if cycling || out_of_budget || !rnorm.is_finite() {
-            let (_, t_held) = released?;
-            // No point with the gaps' status: back to the one with the held status.
-            trial.unknowns.copy_from_slice(&ws.pinned_x);
-            ws.trace.dxf.copy_from_slice(&ws.trace.held_dxf);
-            contact::restore_saved(ws);
+        cycling || out_of_budget || !rnorm.is_finite()
+    }
+}
+
+impl Tracer<'_, '_> {
+    /// Lands on `t = to` under strain control from the prediction in `trial.unknowns`;
+    /// returns whether Newton converged there.
+    fn land(&mut self) -> bool {
+        let landing = Settings {
+            max_iterations: MAX_LANDING,
+            ..*self.settings
+        };
+        let outcome = newton(
+            self.problem,
+            &landing,
+            &self.line.at(self.to),
+            &mut self.trial.unknowns,
+            self.ws,
+            Mode::Newton,
+            false,
+        );
+        self.work.iterations += self.ws.residuals.len().saturating_sub(1) as u32;
+        outcome.is_ok()
+    }
+
+    /// The corrector of one arc step of length `length` from the arc point `ws.trace.xa`
+    /// at `t_a`, predicted along `dt_pred ws.trace.dxf`: Newton on the residual and Riks'
+    /// normal plane together. Returns the converged `t` (the unknowns are in `trial`), or
+    /// `None`. Leaves the predictor direction in `ws.trace.pred`.
+    fn correct(&mut self, dt_pred: f64) -> Option<f64> {
+        let mut c = self.predict(dt_pred);
+        loop {
+            let (problem, ws) = (self.problem, &mut *self.ws);
             problem.evaluate(
-                &trial.unknowns,
-                &line.at(t_held),
+                &self.trial.unknowns,
+                &self.line.at(c.t),
                 TangentKind::Consistent,
                 ws,
             );
-            return Some(t_held);
+            let rnorm = dot(&ws.current.r, &ws.current.r).sqrt();
+            if rnorm <= self.tolerance {
+                if c.released.is_none()
+                    && contact::release_opened(problem, &self.trial.unknowns, ws)
+                {
+                    // Converged with points held closed whose gap opened: look once for
+                    // the point of this arc with them open, from here (as `newton` does).
+                    ws.pinned_x.copy_from_slice(&self.trial.unknowns);
+                    ws.trace.held_dxf.copy_from_slice(&ws.trace.dxf);
+                    c.released = Some((c.iteration, c.t));
+                    c.recent = [(0u64, f64::INFINITY); CYCLE_WINDOW];
+                    continue;
+                }
+                return Some(c.t);
+            }
+            let branches = ws.current.counts.branch_signature;
+            if c.stops(branches, rnorm) {
+                let (_, t_held) = c.released?;
+                return Some(self.back_to_held(t_held));
+            }
+            c.recent[c.iteration % CYCLE_WINDOW] = (branches, rnorm);
+            c.iteration += 1;
+            c.t += self.riks_step(c.dt_pred)?;
         }
-        recent[iteration % CYCLE_WINDOW] = (branches, rnorm);
-        iteration += 1;
+    }
+
+    /// The predictor `x_a + dt_pred dx_f` into `trial.unknowns`, its direction kept in
+    /// `ws.trace.pred` (it stays the normal of the constraint plane).
+    fn predict(&mut self, dt_pred: f64) -> Corrector {
+        let trace = &mut self.ws.trace;
+        trace.pred.copy_from_slice(&trace.dxf);
+        for (x, (xa, p)) in self
+            .trial
+            .unknowns
+            .iter_mut()
+            .zip(trace.xa.iter().zip(&trace.pred))
+        {
+            *x = xa + dt_pred * p;
+        }
+        Corrector {
+            dt_pred,
+            t: self.t_a + dt_pred,
+            recent: [(0u64, f64::INFINITY); CYCLE_WINDOW],
+            released: None,
+            iteration: 0,
+        }
+    }
+
+    /// No point with the gaps' status: back to the one with the held status, at
+    /// `t_held`, re-evaluated; returns `t_held`.
+    fn back_to_held(&mut self, t_held: f64) -> f64 {
+        let ws = &mut *self.ws;
+        self.trial.unknowns.copy_from_slice(&ws.pinned_x);
+        ws.trace.dxf.copy_from_slice(&ws.trace.held_dxf);
+        contact::restore_saved(ws);
+        self.problem.evaluate(
+            &self.trial.unknowns,
+            &self.line.at(t_held),
+            TangentKind::Consistent,
+            ws,
+        );
+        t_held
+    }
+
+    /// One corrector iteration with a fresh factorization: `dx = dx_R + dt dx_f` added to
+    /// `trial.unknowns`, `dt` from the constraint of the predictor `dt_pred
+    /// ws.trace.pred`; returns `dt`, or `None` (singular `K`, no solution of the
+    /// constraint).
+    fn riks_step(&mut self, dt_pred: f64) -> Option<f64> {
+        let (problem, ws) = (self.problem, &mut *self.ws);
         problem.factorize(ws, false).ok()?;
-        work.iterations += 1;
+        self.work.iterations += 1;
         // dx_R into ws.dx, dx_f into ws.trace.dxf (both with this factorization).
         ws.dx
             .iter_mut()
@@ -498,16 +686,21 @@ fn correct(
         let trace = &ws.trace;
         for i in 0..trace.xa.len() {
             let p = dt_pred * trace.pred[i];
-            cur_p += (trial.unknowns[i] - trace.xa[i] + ws.dx[i]) * p;
+            cur_p += (self.trial.unknowns[i] - trace.xa[i] + ws.dx[i]) * p;
             dxf_p += trace.dxf[i] * p;
         }
         if dxf_p == 0.0 || !dxf_p.is_finite() {
             return None;
         }
-        let dt = (length * length - cur_p) / dxf_p;
-        for (x, (d, f)) in trial.unknowns.iter_mut().zip(ws.dx.iter().zip(&trace.dxf)) {
+        let dt = (self.length * self.length - cur_p) / dxf_p;
+        for (x, (d, f)) in self
+            .trial
+            .unknowns
+            .iter_mut()
+            .zip(ws.dx.iter().zip(&trace.dxf))
+        {
             *x += d + dt * f;
         }
-        t += dt;
+        Some(dt)
     }
 }
