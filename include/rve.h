@@ -66,6 +66,10 @@ typedef enum RveStatus {
   // An output file could not be written (`rve_write_vtk`: missing directory, no
   // permission, disk full); `rve_last_error` names the path and the system's reason.
   RVE_STATUS_WRITE_FAILED = 16,
+  // The sparse linear algebra failed outside a solve: the symbolic analysis of the
+  // RVE's matrix pattern (`rve_init_*`). A failed factorization within a solve is
+  // `SOLVER_FAILED`.
+  RVE_STATUS_LINEAR_ALGEBRA_FAILED = 17,
   // An internal invariant was violated (a bug: please report it).
   RVE_STATUS_INTERNAL = 98,
   // A Rust panic was caught at the C boundary (a bug: please report it).

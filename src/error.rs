@@ -2,6 +2,20 @@
 
 use std::path::PathBuf;
 
+/// A failure of the sparse linear algebra (faer), typed by the step that failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LinearAlgebraError {
+    /// The symbolic analysis (ordering, elimination tree) of a pattern.
+    #[error("symbolic {factorization} analysis failed: {reason}")]
+    Analysis {
+        factorization: &'static str,
+        reason: String,
+    },
+    /// The numeric factorization of a matrix (singular, or no pivot found).
+    #[error("numeric factorization failed: {reason}")]
+    Numeric { reason: String },
+}
+
 /// Everything that can go wrong in mesorve, from reading a scene to solving an RVE.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -31,6 +45,10 @@ pub enum Error {
     /// Meshing failed or produced an unusable mesh.
     #[error("mesh: {0}")]
     Mesh(String),
+    /// The sparse linear algebra failed outside a solve (the symbolic analysis of a
+    /// model's pattern); within a solve a failed factorization is [`Error::Solve`].
+    #[error("linear algebra: {0}")]
+    LinearAlgebra(#[from] LinearAlgebraError),
     /// The macro strain is NaN, infinite or absurdly large.
     #[error("strain {strain:?}: {reason}")]
     BadStrain { strain: [f64; 3], reason: String },

@@ -50,6 +50,10 @@ pub enum RveStatus {
     /// An output file could not be written (`rve_write_vtk`: missing directory, no
     /// permission, disk full); `rve_last_error` names the path and the system's reason.
     WriteFailed = 16,
+    /// The sparse linear algebra failed outside a solve: the symbolic analysis of the
+    /// RVE's matrix pattern (`rve_init_*`). A failed factorization within a solve is
+    /// `SOLVER_FAILED`.
+    LinearAlgebraFailed = 17,
     /// An internal invariant was violated (a bug: please report it).
     Internal = 98,
     /// A Rust panic was caught at the C boundary (a bug: please report it).
@@ -57,7 +61,7 @@ pub enum RveStatus {
 }
 
 /// Every status, for tests and documentation.
-pub const ALL_STATUSES: [RveStatus; 19] = [
+pub const ALL_STATUSES: [RveStatus; 20] = [
     RveStatus::Ok,
     RveStatus::NullArgument,
     RveStatus::BadScene,
@@ -75,6 +79,7 @@ pub const ALL_STATUSES: [RveStatus; 19] = [
     RveStatus::StateMismatch,
     RveStatus::BatchFailed,
     RveStatus::WriteFailed,
+    RveStatus::LinearAlgebraFailed,
     RveStatus::Internal,
     RveStatus::Panic,
 ];
@@ -108,6 +113,9 @@ impl RveStatus {
             RveStatus::StateMismatch => "the state belongs to a model of another scene\0",
             RveStatus::BatchFailed => "at least one item of the batch failed\0",
             RveStatus::WriteFailed => "an output file could not be written\0",
+            RveStatus::LinearAlgebraFailed => {
+                "the sparse linear algebra failed (symbolic analysis of the RVE matrix)\0"
+            }
             RveStatus::Internal => "internal error (a bug: please report it)\0",
             RveStatus::Panic => "internal error (panic caught at the C boundary)\0",
         }
@@ -144,6 +152,7 @@ impl From<&Error> for RveStatus {
                 }
             }
             Error::Solve { .. } => RveStatus::SolverFailed,
+            Error::LinearAlgebra(_) => RveStatus::LinearAlgebraFailed,
             Error::WorkspaceMismatch | Error::StateEncoding { .. } => RveStatus::Internal,
             Error::NoTrial => RveStatus::NoTrial,
             Error::BadState { .. } => RveStatus::BadState,
@@ -180,7 +189,7 @@ mod tests {
             assert!(status.message().ends_with('\0'));
             assert!(!status.text().contains('\0'));
         }
-        assert_eq!(RveStatus::from_u32(17), None);
+        assert_eq!(RveStatus::from_u32(18), None);
         assert_eq!(RveStatus::try_from(97), Err(97));
         let unknown = unsafe { std::ffi::CStr::from_ptr(rve_status_message(12345)) };
         assert_eq!(unknown.to_str().unwrap(), "unknown status code");
@@ -207,6 +216,14 @@ mod tests {
             RveStatus::MeshFailed
         );
         assert_eq!(RveStatus::from(&Error::NoTrial), RveStatus::NoTrial);
+        let analysis = crate::error::LinearAlgebraError::Analysis {
+            factorization: "LU",
+            reason: String::new(),
+        };
+        assert_eq!(
+            RveStatus::from(&Error::from(analysis)),
+            RveStatus::LinearAlgebraFailed
+        );
         let bad = Error::BadState {
             reason: String::new(),
         };

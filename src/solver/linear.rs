@@ -46,7 +46,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
 use super::supernodal_solve;
-use crate::error::{Error, Result};
+use crate::error::{LinearAlgebraError, Result};
 
 /// Which factorization a [`NumericFactor`] holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -193,8 +193,12 @@ impl LinearSolver {
         // Supernodal where faer chooses it: simplicial LU would allocate nothing but is
         // 5x (722 unknowns) to 12x (8.9k) slower (measured with benches/solver.rs), and LU
         // only runs on indefinite tangents, past the peak.
-        let lu = factorize_symbolic_lu(pattern.as_ref(), Default::default())
-            .map_err(|e| Error::Mesh(format!("symbolic LU analysis failed: {e:?}")))?;
+        let lu = factorize_symbolic_lu(pattern.as_ref(), Default::default()).map_err(|e| {
+            LinearAlgebraError::Analysis {
+                factorization: "LU",
+                reason: format!("{e:?}"),
+            }
+        })?;
         let symmetric = if spd_possible && pattern.nrows() > 0 {
             let symbolic = factorize_symbolic_cholesky(
                 pattern.as_ref(),
@@ -207,12 +211,17 @@ impl LinearSolver {
                     ..Default::default()
                 },
             )
-            .map_err(|e| Error::Mesh(format!("symbolic Cholesky analysis failed: {e:?}")))?;
+            .map_err(|e| LinearAlgebraError::Analysis {
+                factorization: "Cholesky",
+                reason: format!("{e:?}"),
+            })?;
             // The numeric kernels called below are the supernodal ones.
             if !matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
-                return Err(Error::Mesh(
-                    "symbolic Cholesky analysis is not supernodal".into(),
-                ));
+                return Err(LinearAlgebraError::Analysis {
+                    factorization: "Cholesky",
+                    reason: "not supernodal".into(),
+                }
+                .into());
             }
             let identity: Vec<usize>;
             let inverse = match symbolic.perm() {
@@ -297,7 +306,7 @@ impl LinearSolver {
         numeric: &mut NumericFactor,
         try_symmetric: bool,
         stack: &mut MemStack,
-    ) -> std::result::Result<FactorKind, String> {
+    ) -> std::result::Result<FactorKind, LinearAlgebraError> {
         numeric.current = None;
         numeric.count += 1;
         let a = SparseColMatRef::new(pattern.as_ref(), values);
@@ -318,7 +327,9 @@ impl LinearSolver {
         }
         self.lu
             .factorize_numeric_lu(&mut numeric.lu, a, Par::Seq, stack, Default::default())
-            .map_err(|e| format!("{e:?}"))?;
+            .map_err(|e| LinearAlgebraError::Numeric {
+                reason: format!("{e:?}"),
+            })?;
         numeric.current = Some(FactorKind::Lu);
         numeric.lu_count += 1;
         Ok(FactorKind::Lu)

@@ -411,7 +411,7 @@ fn correction(
     if fresh {
         problem
             .factorize(ws, kind == TangentKind::Consistent)
-            .map_err(Failure::Singular)?;
+            .map_err(|e| Failure::Singular(e.to_string()))?;
     }
     if fresh && ws.factorization.is_reusable() {
         ws.factorization.solve_with_g(

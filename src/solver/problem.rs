@@ -13,6 +13,7 @@ use super::linear::{FactorKind, LinearSolver};
 use super::settings::Settings;
 use super::workspace::{Evaluation, Workspace};
 use crate::assembly::Discretization;
+use crate::error::LinearAlgebraError;
 use crate::interface::TangentKind;
 
 /// A macro strain `[eps_xx, eps_yy, gamma_xy]` (engineering shear).
@@ -109,7 +110,7 @@ impl Problem<'_> {
         &self,
         ws: &mut Workspace,
         reusable: bool,
-    ) -> Result<FactorKind, String> {
+    ) -> Result<FactorKind, LinearAlgebraError> {
         ws.factorization.factorize(
             self.linear,
             &self.disc.pattern.symbolic,

@@ -5,6 +5,7 @@
 //! its invariants: the copy of the factorized matrix, whether it was a consistent tangent,
 //! and whether `K_f^-1 G` belongs to it change only together with the factors.
 
+use crate::error::LinearAlgebraError;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMat;
 
@@ -70,7 +71,7 @@ impl Factorization {
         pattern: &SymbolicSparseColMat<usize>,
         values: &[f64],
         reusable: bool,
-    ) -> Result<FactorKind, String> {
+    ) -> Result<FactorKind, LinearAlgebraError> {
         self.kg_of_factor = false;
         self.consistent = false;
         let kind = linear.factorize(
