@@ -2,7 +2,7 @@
 
 use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -10,7 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rve::error::{Error, Result};
 use rve::scene::path_points;
-use rve::{Instance, Model, TangentRequest};
+use rve::{Instance, Model, Response, TangentRequest};
 
 use super::load_scene;
 
@@ -82,17 +82,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let start = Instant::now();
     let model = Arc::new(Model::from_scene(&scene)?);
     let setup = start.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
-        path: args.out.clone(),
-        source,
-    })?;
-    let csv_path = args.out.join("response.csv");
-    let io_err = |source| Error::Io {
-        path: csv_path.clone(),
-        source,
-    };
-    let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err)?);
-    writeln!(csv, "{CSV_HEADER}").map_err(io_err)?;
+    let points = path_points(&scene.spec.path);
+    let mut outputs = Outputs::create(args, &model, points.len())?;
     if !args.quiet {
         eprintln!(
             "{name}: {} unknowns, {} interface elements, model built in {:.1} ms",
@@ -101,37 +92,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
             1e3 * setup
         );
     }
-    for dir in args.vtk.iter().chain(&args.svg) {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-            path: dir.clone(),
-            source,
-        })?;
-    }
-    let points = path_points(&scene.spec.path);
-    if let (Some(_), Frames::List(list)) = (&args.svg, &args.frames) {
-        if let Some(bad) = list.iter().find(|&&k| k > points.len()) {
-            return Err(Error::scene(
-                "path",
-                format!(
-                    "--frames names increment {bad}, the path has {}",
-                    points.len()
-                ),
-            ));
-        }
-    }
-    let mut response = Vec::new();
-    // (increment, committed state) kept for --frames last/peak.
-    let mut kept: Option<(usize, rve::State, f64)> = None;
-    let mut series = Vec::new();
+    outputs.create_dirs()?;
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
-    let n_steps = points.len();
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let style = ProgressStyle::with_template(
             "{bar:32} {pos}/{len} increments, {elapsed} (eta {eta})  {msg}",
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar());
-        ProgressBar::new(n_steps as u64).with_style(style)
+        ProgressBar::new(points.len() as u64).with_style(style)
     });
     let times = step_times(&points);
     for (step, eps) in points.into_iter().enumerate() {
@@ -139,56 +108,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let r = instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
         let seconds = t0.elapsed().as_secs_f64();
         instance.commit()?;
-        let d = r.tangent;
-        writeln!(
-            csv,
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:e},{},{},{},{},{:e},{},{},{}",
-            step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
-            d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8],
-            r.report.iterations, r.report.substeps, r.s_zz, r.report.factorizations,
-            r.report.loading, r.report.unloading, r.report.contact, seconds,
-            r.report.limit_points, r.report.held_points, u8::from(r.report.answer.is_fast())
-        )
-        .map_err(io_err)?;
-        if let Some(dir) = &args.vtk {
-            let file = format!("step_{:04}.vtu", step + 1);
-            model.write_vtu(instance.committed(), &dir.join(&file))?;
-            series.push(((step + 1) as f64, file));
-        }
-        if let Some(dir) = &args.svg {
-            response.push(rve::io::ResponsePoint {
-                t: (step + 1) as f64,
-                stress: r.stress,
-                loading_points: r.report.loading,
-                contact_points: r.report.contact,
-            });
-            // The stress along the direction of the first increment's stress.
-            let first = response[0].stress;
-            let norm = first
-                .iter()
-                .map(|v| v * v)
-                .sum::<f64>()
-                .sqrt()
-                .max(f64::MIN_POSITIVE);
-            let size = (0..3).map(|k| r.stress[k] * first[k]).sum::<f64>() / norm;
-            let keep = match &args.frames {
-                Frames::All => {
-                    write_frame(&model, dir, step + 1, instance.committed())?;
-                    false
-                }
-                Frames::List(list) => {
-                    if list.contains(&(step + 1)) {
-                        write_frame(&model, dir, step + 1, instance.committed())?;
-                    }
-                    false
-                }
-                Frames::Last => step + 1 == n_steps,
-                Frames::Peak => kept.as_ref().is_none_or(|k| size > k.2),
-            };
-            if keep {
-                kept = Some((step + 1, instance.committed().clone(), size));
-            }
-        }
+        outputs.record(step + 1, eps, &r, seconds, instance.committed())?;
         if let Some(bar) = &bar {
             bar.set_message(format!(
                 "sig = [{:+.4} {:+.4} {:+.4}]",
@@ -206,21 +126,172 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(bar) = &bar {
         bar.finish();
     }
-    csv.flush().map_err(io_err)?;
-    if let Some(dir) = &args.vtk {
-        write_series_index(&dir.join("series.pvd"), &series)?;
+    outputs.finish()
+}
+
+/// The files of one `rve run`: `response.csv`, and what `--vtk` and `--svg` ask for.
+struct Outputs<'a> {
+    args: &'a RunArgs,
+    model: &'a Model,
+    csv_path: PathBuf,
+    csv: BufWriter<File>,
+    /// Increments on the path.
+    n_steps: usize,
+    /// The points of `response.svg`.
+    response: Vec<rve::io::ResponsePoint>,
+    /// (increment, committed state, stress along the first one's) kept for --frames
+    /// last/peak.
+    kept: Option<(usize, rve::State, f64)>,
+    /// (time, file) of the VTK series.
+    series: Vec<(f64, String)>,
+}
+
+impl<'a> Outputs<'a> {
+    /// Creates the output directory and `response.csv` with its header.
+    fn create(args: &'a RunArgs, model: &'a Model, n_steps: usize) -> Result<Self> {
+        std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
+            path: args.out.clone(),
+            source,
+        })?;
+        let csv_path = args.out.join("response.csv");
+        let io_err = io_error(&csv_path);
+        let mut csv = BufWriter::new(File::create(&csv_path).map_err(&io_err)?);
+        writeln!(csv, "{CSV_HEADER}").map_err(io_err)?;
+        Ok(Outputs {
+            args,
+            model,
+            csv_path,
+            csv,
+            n_steps,
+            response: Vec::new(),
+            kept: None,
+            series: Vec::new(),
+        })
     }
-    if let Some(dir) = &args.svg {
-        if let Some((step, state, _)) = &kept {
-            write_frame(&model, dir, *step, state)?;
+
+    /// Creates the `--vtk` and `--svg` directories, and checks that the increments of
+    /// `--frames` are on the path.
+    fn create_dirs(&self) -> Result<()> {
+        let args = self.args;
+        for dir in args.vtk.iter().chain(&args.svg) {
+            std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+                path: dir.clone(),
+                source,
+            })?;
         }
-        let path = dir.join("response.svg");
-        write_with(&path, |w| rve::io::write_response_svg(&response, w))?;
+        if let (Some(_), Frames::List(list)) = (&args.svg, &args.frames) {
+            if let Some(bad) = list.iter().find(|&&k| k > self.n_steps) {
+                return Err(Error::scene(
+                    "path",
+                    format!(
+                        "--frames names increment {bad}, the path has {}",
+                        self.n_steps
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
-    if !args.quiet {
-        eprintln!("wrote {}", csv_path.display());
+
+    /// Writes increment `step` (from 1) at strain `eps`, its response `r` solved in
+    /// `seconds`, and its committed state `state`: a line of `response.csv`, a VTK file,
+    /// a point of `response.svg` and a picture of `--frames`.
+    fn record(
+        &mut self,
+        step: usize,
+        eps: [f64; 3],
+        r: &Response,
+        seconds: f64,
+        state: &rve::State,
+    ) -> Result<()> {
+        let d = r.tangent;
+        writeln!(
+            self.csv,
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:e},{},{},{},{},{:e},{},{},{}",
+            step, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
+            d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8],
+            r.report.iterations, r.report.substeps, r.s_zz, r.report.factorizations,
+            r.report.loading, r.report.unloading, r.report.contact, seconds,
+            r.report.limit_points, r.report.held_points, u8::from(r.report.answer.is_fast())
+        )
+        .map_err(io_error(&self.csv_path))?;
+        if let Some(dir) = &self.args.vtk {
+            let file = format!("step_{step:04}.vtu");
+            self.model.write_vtu(state, &dir.join(&file))?;
+            self.series.push((step as f64, file));
+        }
+        if let Some(dir) = &self.args.svg {
+            self.picture(dir, step, r, state)?;
+        }
+        Ok(())
     }
-    Ok(())
+
+    /// `--svg`: the point of `response.svg` of increment `step` (response `r`), and its
+    /// picture if `--frames` names it, or the state kept for `last` and `peak`.
+    fn picture(&mut self, dir: &Path, step: usize, r: &Response, state: &rve::State) -> Result<()> {
+        self.response.push(rve::io::ResponsePoint {
+            t: step as f64,
+            stress: r.stress,
+            loading_points: r.report.loading,
+            contact_points: r.report.contact,
+        });
+        // The stress along the direction of the first increment's stress.
+        let first = self.response[0].stress;
+        let norm = first
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
+        let size = (0..3).map(|k| r.stress[k] * first[k]).sum::<f64>() / norm;
+        let keep = match &self.args.frames {
+            Frames::All => {
+                write_frame(self.model, dir, step, state)?;
+                false
+            }
+            Frames::List(list) => {
+                if list.contains(&step) {
+                    write_frame(self.model, dir, step, state)?;
+                }
+                false
+            }
+            Frames::Last => step == self.n_steps,
+            Frames::Peak => self.kept.as_ref().is_none_or(|k| size > k.2),
+        };
+        if keep {
+            self.kept = Some((step, state.clone(), size));
+        }
+        Ok(())
+    }
+
+    /// Flushes `response.csv`, writes the VTK index, the kept picture and
+    /// `response.svg`.
+    fn finish(mut self) -> Result<()> {
+        self.csv.flush().map_err(io_error(&self.csv_path))?;
+        let args = self.args;
+        if let Some(dir) = &args.vtk {
+            write_series_index(&dir.join("series.pvd"), &self.series)?;
+        }
+        if let Some(dir) = &args.svg {
+            if let Some((step, state, _)) = &self.kept {
+                write_frame(self.model, dir, *step, state)?;
+            }
+            let path = dir.join("response.svg");
+            write_with(&path, |w| rve::io::write_response_svg(&self.response, w))?;
+        }
+        if !args.quiet {
+            eprintln!("wrote {}", self.csv_path.display());
+        }
+        Ok(())
+    }
+}
+
+/// Maps a failure to write `path` to [`Error::Io`].
+fn io_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 /// Writes the `.pvd` index of the VTK series.
