@@ -35,8 +35,8 @@
 //! point after them. So a step short enough for its prediction, or a correction or two,
 //! to converge converges with the start's status, and the response is continuous in the
 //! step. (Read from the gaps instead, every update after a state with
-//! held points would start out of equilibrium by the traction jump of those points:
-//! measured up to 1e2 times the tolerance's reference on the hard cases.) Path following
+//! held points would start out of equilibrium by the traction jump of those points,
+//! far above the tolerance on the hard cases; `docs/contact-algorithm.md`.) Path following
 //! treats its arc points the same way, and an arc-length corrector holds its start's
 //! status until it converges (see `arclength`).
 

@@ -191,8 +191,8 @@ impl LinearSolver {
     /// saddle-point systems.
     pub fn new(pattern: &SymbolicSparseColMat<usize>, spd_possible: bool) -> Result<Self> {
         // Supernodal where faer chooses it: simplicial LU would allocate nothing but is
-        // 5x (722 unknowns) to 12x (8.9k) slower (measured with benches/solver.rs), and LU
-        // only runs on indefinite tangents, past the peak.
+        // much slower on these patterns (`docs/solver.md`), and LU only runs on
+        // indefinite tangents, past the peak.
         let lu = factorize_symbolic_lu(pattern.as_ref(), Default::default()).map_err(|e| {
             LinearAlgebraError::Analysis {
                 factorization: "LU",
@@ -205,8 +205,8 @@ impl LinearSolver {
                 Side::Lower,
                 SymmetricOrdering::Amd,
                 CholeskySymbolicParams {
-                    // Measured (benches/solver.rs): supernodal is 2x faster than
-                    // simplicial already at 722 unknowns, and faster at 9k.
+                    // Supernodal beats simplicial from the paper RVE's size up
+                    // (`docs/solver.md`).
                     supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
                     ..Default::default()
                 },
