@@ -79,51 +79,85 @@ pub unsafe extern "C" fn rve_update_batch(
     nthreads: usize,
 ) -> u32 {
     guard("rve_update_batch", || {
-        let request = match tangent_request {
-            0 => RveTangentRequest::Consistent,
-            1 => RveTangentRequest::None,
-            2 => RveTangentRequest::Elastic,
-            v => {
-                return Err(Failure::new(
-                    RveStatus::InvalidArgument,
-                    format!("tangent_request {v} is not an RveTangentRequest"),
-                ))
-            }
-        };
+        let request = request_of(tangent_request)?;
         let too_long = || Failure::new(RveStatus::InvalidArgument, format!("n = {n} too large"));
         let n3 = n.checked_mul(3).ok_or_else(too_long)?;
         let n9 = n.checked_mul(9).ok_or_else(too_long)?;
         if n == 0 {
             return Ok(());
         }
-        let handles = slice(handles, n, "handles")?;
-        let strains = slice(strains, n3, "strains")?;
+        let items = Items {
+            handles: slice(handles, n, "handles")?,
+            strains: slice(strains, n3, "strains")?,
+            request,
+        };
         let stresses = slice_mut(stresses, n3, "stresses")?;
         let statuses = slice_mut(statuses, n, "statuses")?;
-        let mut tangents = if request == RveTangentRequest::None {
+        let tangents = if request == RveTangentRequest::None {
             None
         } else {
             Some(slice_mut(tangents, n9, "tangents")?)
         };
-        let mut results: Vec<Result<(), Failure>> = Vec::with_capacity(n);
-        let run = |k: usize, stress: &mut [f64], tangent: Option<&mut [f64]>| {
-            // A panic in one item becomes that item's status.
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                one(
-                    handles[k],
-                    &strains[3 * k..3 * k + 3],
-                    stress,
-                    tangent,
-                    request,
-                )
-            }))
-            .unwrap_or_else(|_| Err(Failure::new(RveStatus::Panic, "panic in batch item")))
-        };
+        let results = items.run_all(stresses, tangents, nthreads)?;
+        report(&results, statuses)
+    }) as u32
+}
+
+/// The `tangent_request` argument of [`rve_update_batch`].
+fn request_of(tangent_request: i32) -> FfiResult<RveTangentRequest> {
+    match tangent_request {
+        0 => Ok(RveTangentRequest::Consistent),
+        1 => Ok(RveTangentRequest::None),
+        2 => Ok(RveTangentRequest::Elastic),
+        v => Err(Failure::new(
+            RveStatus::InvalidArgument,
+            format!("tangent_request {v} is not an RveTangentRequest"),
+        )),
+    }
+}
+
+/// The inputs of a batch: item `k` updates `handles[k]` to `strains[3k..3k + 3]`.
+struct Items<'a> {
+    handles: &'a [RveHandle],
+    strains: &'a [f64],
+    request: RveTangentRequest,
+}
+
+impl Items<'_> {
+    /// Item `k` into its outputs; a panic in it becomes its status.
+    fn run(
+        &self,
+        k: usize,
+        stress: &mut [f64],
+        tangent: Option<&mut [f64]>,
+    ) -> Result<(), Failure> {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            one(
+                self.handles[k],
+                &self.strains[3 * k..3 * k + 3],
+                stress,
+                tangent,
+                self.request,
+            )
+        }))
+        .unwrap_or_else(|_| Err(Failure::new(RveStatus::Panic, "panic in batch item")))
+    }
+
+    /// Every item, on the calling thread (`nthreads` 1), rayon's global pool (0) or a
+    /// pool of `nthreads`, into the chunks of `stresses` and `tangents` (3 and 9 values
+    /// an item); the results in item order.
+    fn run_all(
+        &self,
+        stresses: &mut [f64],
+        mut tangents: Option<&mut [f64]>,
+        nthreads: usize,
+    ) -> FfiResult<Vec<Result<(), Failure>>> {
+        let mut results: Vec<Result<(), Failure>> = Vec::with_capacity(self.handles.len());
         match nthreads {
             1 => {
                 for (k, stress) in stresses.chunks_mut(3).enumerate() {
                     let t = tangents.as_deref_mut().map(|t| &mut t[9 * k..9 * k + 9]);
-                    results.push(run(k, stress, t));
+                    results.push(self.run(k, stress, t));
                 }
             }
             _ => {
@@ -132,10 +166,10 @@ pub unsafe extern "C" fn rve_update_batch(
                     match tangents.as_deref_mut() {
                         Some(t) => stress_chunks
                             .zip(t.par_chunks_mut(9))
-                            .map(|((k, s), t)| run(k, s, Some(t)))
+                            .map(|((k, s), t)| self.run(k, s, Some(t)))
                             .collect_into_vec(&mut results),
                         None => stress_chunks
-                            .map(|(k, s)| run(k, s, None))
+                            .map(|(k, s)| self.run(k, s, None))
                             .collect_into_vec(&mut results),
                     }
                 };
@@ -146,22 +180,28 @@ pub unsafe extern "C" fn rve_update_batch(
                 }
             }
         }
-        let mut first = None;
-        for (k, (r, s)) in results.iter().zip(statuses.iter_mut()).enumerate() {
-            *s = match r {
-                Ok(()) => RveStatus::Ok as u32,
-                Err(f) => {
-                    first.get_or_insert((k, f));
-                    f.status as u32
-                }
-            };
-        }
-        match first {
-            None => Ok(()),
-            Some((k, f)) => Err(Failure::new(
-                RveStatus::BatchFailed,
-                format!("item {k}: {}", f.message),
-            )),
-        }
-    }) as u32
+        Ok(results)
+    }
+}
+
+/// Writes each item's status into `statuses`; `BATCH_FAILED` with the first failed item's
+/// message (prefixed with its index) if any failed.
+fn report(results: &[Result<(), Failure>], statuses: &mut [u32]) -> FfiResult<()> {
+    let mut first = None;
+    for (k, (r, s)) in results.iter().zip(statuses.iter_mut()).enumerate() {
+        *s = match r {
+            Ok(()) => RveStatus::Ok as u32,
+            Err(f) => {
+                first.get_or_insert((k, f));
+                f.status as u32
+            }
+        };
+    }
+    match first {
+        None => Ok(()),
+        Some((k, f)) => Err(Failure::new(
+            RveStatus::BatchFailed,
+            format!("item {k}: {}", f.message),
+        )),
+    }
 }
