@@ -846,50 +846,9 @@ fn assemble(
 ) -> Result<PhaseMesh> {
     let mut triangles = std::mem::take(&mut raw.triangles);
     let groups = Groups::new(&raw, r, matrix_group, inclusion_groups)?;
-
-    let mut node_of_tag: HashMap<u64, usize> = HashMap::with_capacity(raw.nodes.len());
-    for (i, node) in raw.nodes.iter().enumerate() {
-        if node_of_tag.insert(node.tag, i).is_some() {
-            return Err(r.error(node.line, format!("node tag {} appears twice", node.tag)));
-        }
-    }
-
-    triangles.sort_by_key(|t| t.tag);
-    if let Some(pair) = triangles.windows(2).find(|w| w[0].tag == w[1].tag) {
-        let reason = format!("element tag {} appears twice", pair[1].tag);
-        return Err(r.error(pair[1].line, reason));
-    }
-    if triangles.is_empty() {
-        return Err(r.error(
-            r.last_line,
-            "the file contains no triangles (element type 2)",
-        ));
-    }
-    if triangles.len() > MAX_TRIANGLES {
-        let reason = format!(
-            "the file holds {} triangles, more than the limit of {} for an RVE mesh",
-            triangles.len(),
-            MAX_TRIANGLES
-        );
-        return Err(r.error(r.last_line, reason));
-    }
-
-    // Phase and raw node indices of each triangle.
-    let mut labelled = Vec::with_capacity(triangles.len());
-    for t in &triangles {
-        let phase = groups.phase(t, r)?;
-        let mut nodes = [0; 3];
-        for (slot, tag) in nodes.iter_mut().zip(t.nodes) {
-            *slot = *node_of_tag.get(&tag).ok_or_else(|| {
-                let reason = format!(
-                    "triangle {} references node {tag}, which is not in $Nodes",
-                    t.tag
-                );
-                r.error(t.line, reason)
-            })?;
-        }
-        labelled.push((nodes, phase));
-    }
+    let node_of_tag = node_indices(&raw.nodes, r)?;
+    sort_triangles(&mut triangles, r)?;
+    let labelled = label_triangles(&triangles, &groups, &node_of_tag, r)?;
 
     // Keep the used nodes, numbered in increasing tag order.
     let mut used: Vec<usize> = labelled.iter().flat_map(|(nodes, _)| *nodes).collect();
@@ -925,6 +884,67 @@ fn assemble(
         Some(&(t, twice_area)) => Err(inverted(t, twice_area, clockwise.len(), triangles.len(), r)),
         None => Ok(mesh),
     }
+}
+
+/// The index of each node tag in `nodes`; a tag that appears twice is an error.
+fn node_indices(nodes: &[RawNode], r: &Reader) -> Result<HashMap<u64, usize>> {
+    let mut node_of_tag: HashMap<u64, usize> = HashMap::with_capacity(nodes.len());
+    for (i, node) in nodes.iter().enumerate() {
+        if node_of_tag.insert(node.tag, i).is_some() {
+            return Err(r.error(node.line, format!("node tag {} appears twice", node.tag)));
+        }
+    }
+    Ok(node_of_tag)
+}
+
+/// Sorts the triangles by tag; a tag that appears twice, no triangle, or more than
+/// [`MAX_TRIANGLES`] are errors.
+fn sort_triangles(triangles: &mut [RawTriangle], r: &Reader) -> Result<()> {
+    triangles.sort_by_key(|t| t.tag);
+    if let Some(pair) = triangles.windows(2).find(|w| w[0].tag == w[1].tag) {
+        let reason = format!("element tag {} appears twice", pair[1].tag);
+        return Err(r.error(pair[1].line, reason));
+    }
+    if triangles.is_empty() {
+        return Err(r.error(
+            r.last_line,
+            "the file contains no triangles (element type 2)",
+        ));
+    }
+    if triangles.len() > MAX_TRIANGLES {
+        let reason = format!(
+            "the file holds {} triangles, more than the limit of {} for an RVE mesh",
+            triangles.len(),
+            MAX_TRIANGLES
+        );
+        return Err(r.error(r.last_line, reason));
+    }
+    Ok(())
+}
+
+/// Phase and raw node indices of each triangle; a node tag not in `$Nodes` is an error.
+fn label_triangles(
+    triangles: &[RawTriangle],
+    groups: &Groups,
+    node_of_tag: &HashMap<u64, usize>,
+    r: &Reader,
+) -> Result<Vec<([usize; 3], Phase)>> {
+    let mut labelled = Vec::with_capacity(triangles.len());
+    for t in triangles {
+        let phase = groups.phase(t, r)?;
+        let mut nodes = [0; 3];
+        for (slot, tag) in nodes.iter_mut().zip(t.nodes) {
+            *slot = *node_of_tag.get(&tag).ok_or_else(|| {
+                let reason = format!(
+                    "triangle {} references node {tag}, which is not in $Nodes",
+                    t.tag
+                );
+                r.error(t.line, reason)
+            })?;
+        }
+        labelled.push((nodes, phase));
+    }
+    Ok(labelled)
 }
 
 /// The requested physical groups and the phase of each of their physical tags.
