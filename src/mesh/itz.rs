@@ -19,7 +19,7 @@
 use std::collections::HashMap;
 
 use super::boundary::{find_boundary_nodes, find_boundary_nodes_split};
-use super::model::{InterfaceElement, Mesh, Phase, PhaseMesh};
+use super::model::{InterfaceElement, Mesh, Phase, PhaseMesh, Triangle};
 use crate::error::{Error, Result};
 
 /// Builds the mesh without interface elements (perfect bonding).
@@ -41,59 +41,8 @@ pub fn insert_itz(phase_mesh: PhaseMesh, width: f64, height: f64) -> Result<Mesh
         mut nodes,
         mut triangles,
     } = phase_mesh;
-
-    // Edge -> (triangle, local edge index) of its (at most two) triangles.
-    let mut edges: HashMap<(usize, usize), Vec<(usize, usize)>> = HashMap::new();
-    for (t, tri) in triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri.nodes[k], tri.nodes[(k + 1) % 3]);
-            edges.entry((a.min(b), a.max(b))).or_default().push((t, k));
-        }
-    }
-
-    // ITZ edges, oriented counter-clockwise around the inclusion triangle, sorted so the
-    // element numbering is deterministic.
-    let mut itz_edges: Vec<(usize, usize)> = Vec::new();
-    for (key, tris) in &edges {
-        if tris.len() > 2 {
-            return Err(Error::Mesh(format!(
-                "edge {key:?} is shared by {} triangles: the mesh is not conforming",
-                tris.len()
-            )));
-        }
-        if let [(t0, k0), (t1, k1)] = tris[..] {
-            let (p0, p1) = (triangles[t0].phase, triangles[t1].phase);
-            let inclusion_side = match (p0, p1) {
-                (Phase::Inclusion, Phase::Matrix) => Some((t0, k0)),
-                (Phase::Matrix, Phase::Inclusion) => Some((t1, k1)),
-                _ => None,
-            };
-            if let Some((t, k)) = inclusion_side {
-                let tri = &triangles[t];
-                itz_edges.push((tri.nodes[k], tri.nodes[(k + 1) % 3]));
-            }
-        }
-    }
-    itz_edges.sort_unstable();
-
-    // One duplicate per ITZ node, for the matrix side.
-    let mut duplicate: HashMap<usize, usize> = HashMap::new();
-    for &(a, b) in &itz_edges {
-        for n in [a, b] {
-            if let std::collections::hash_map::Entry::Vacant(slot) = duplicate.entry(n) {
-                slot.insert(nodes.len());
-                nodes.push(nodes[n]);
-            }
-        }
-    }
-    for tri in triangles.iter_mut().filter(|t| t.phase == Phase::Matrix) {
-        for n in tri.nodes.iter_mut() {
-            if let Some(&d) = duplicate.get(n) {
-                *n = d;
-            }
-        }
-    }
-
+    let itz_edges = itz_edges(&triangles)?;
+    let duplicate = duplicate_nodes(&mut nodes, &mut triangles, &itz_edges);
     let interfaces = itz_edges
         .iter()
         .map(|&(a0, a1)| {
@@ -118,4 +67,68 @@ pub fn insert_itz(phase_mesh: PhaseMesh, width: f64, height: f64) -> Result<Mesh
         interfaces,
         boundary,
     })
+}
+
+/// The ITZ edges (between an inclusion and a matrix triangle), oriented
+/// counter-clockwise around the inclusion triangle, sorted so the element numbering is
+/// deterministic. An edge of more than two triangles is an error.
+fn itz_edges(triangles: &[Triangle]) -> Result<Vec<(usize, usize)>> {
+    // Edge -> (triangle, local edge index) of its (at most two) triangles.
+    let mut edges: HashMap<(usize, usize), Vec<(usize, usize)>> = HashMap::new();
+    for (t, tri) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri.nodes[k], tri.nodes[(k + 1) % 3]);
+            edges.entry((a.min(b), a.max(b))).or_default().push((t, k));
+        }
+    }
+
+    let mut itz_edges: Vec<(usize, usize)> = Vec::new();
+    for (key, tris) in &edges {
+        if tris.len() > 2 {
+            return Err(Error::Mesh(format!(
+                "edge {key:?} is shared by {} triangles: the mesh is not conforming",
+                tris.len()
+            )));
+        }
+        if let [(t0, k0), (t1, k1)] = tris[..] {
+            let (p0, p1) = (triangles[t0].phase, triangles[t1].phase);
+            let inclusion_side = match (p0, p1) {
+                (Phase::Inclusion, Phase::Matrix) => Some((t0, k0)),
+                (Phase::Matrix, Phase::Inclusion) => Some((t1, k1)),
+                _ => None,
+            };
+            if let Some((t, k)) = inclusion_side {
+                let tri = &triangles[t];
+                itz_edges.push((tri.nodes[k], tri.nodes[(k + 1) % 3]));
+            }
+        }
+    }
+    itz_edges.sort_unstable();
+    Ok(itz_edges)
+}
+
+/// One duplicate per ITZ node, for the matrix side: appended to `nodes`, and the matrix
+/// triangles moved onto them. Returns the duplicate of each ITZ node.
+fn duplicate_nodes(
+    nodes: &mut Vec<[f64; 2]>,
+    triangles: &mut [Triangle],
+    itz_edges: &[(usize, usize)],
+) -> HashMap<usize, usize> {
+    let mut duplicate: HashMap<usize, usize> = HashMap::new();
+    for &(a, b) in itz_edges {
+        for n in [a, b] {
+            if let std::collections::hash_map::Entry::Vacant(slot) = duplicate.entry(n) {
+                slot.insert(nodes.len());
+                nodes.push(nodes[n]);
+            }
+        }
+    }
+    for tri in triangles.iter_mut().filter(|t| t.phase == Phase::Matrix) {
+        for n in tri.nodes.iter_mut() {
+            if let Some(&d) = duplicate.get(n) {
+                *n = d;
+            }
+        }
+    }
+    duplicate
 }
