@@ -57,7 +57,7 @@
 
 use nalgebra::{Matrix2, SMatrix, SVector, Vector2};
 
-use crate::interface::{Branch, InterfaceLaw, TangentKind};
+use crate::interface::{Branch, InterfaceLaw, LawPoint, TangentKind};
 
 /// The largest number of quadrature points of any [`InterfaceQuadrature`].
 ///
@@ -274,12 +274,7 @@ pub fn evaluate_with(
     let [j0, j1] = nodal_jumps(u);
     let half_l = 0.5 * geometry.length;
 
-    // Matrix-side half of the force and the 4x4 block A (see the module doc).
-    let mut fb = SVector::<f64, 4>::zeros();
-    let mut a = SMatrix::<f64, 4, 4>::zeros();
-    let (mut loading, mut unloading, mut contact) = (0, 0, 0);
-    let mut branches = 0u8;
-
+    let mut sums = ElementSums::new();
     for (point, &(xi, w)) in rule.iter().enumerate() {
         let shape = [0.5 * (1.0 - xi), 0.5 * (1.0 + xi)];
         let jl = r * (j0 * shape[0] + j1 * shape[1]);
@@ -290,51 +285,95 @@ pub fn evaluate_with(
             None => law.respond(committed, trial, jump, geometry.length, kind),
             Some(st) => law.respond_as(committed, trial, jump, geometry.length, kind, st[point]),
         };
-        let code = match p.branch {
+        sums.count(p.branch, point);
+        sums.add(shape, w * half_l, &r, &p);
+    }
+    sums.response()
+}
+
+/// What [`evaluate_with`] accumulates over the quadrature points: the matrix-side half
+/// of the force `F_B` and the 4x4 block `A` (see the module doc), and the branches.
+struct ElementSums {
+    fb: SVector<f64, 4>,
+    a: SMatrix<f64, 4, 4>,
+    loading: usize,
+    unloading: usize,
+    contact: usize,
+    branches: u8,
+}
+
+impl ElementSums {
+    #[inline]
+    fn new() -> Self {
+        ElementSums {
+            fb: SVector::<f64, 4>::zeros(),
+            a: SMatrix::<f64, 4, 4>::zeros(),
+            loading: 0,
+            unloading: 0,
+            contact: 0,
+            branches: 0,
+        }
+    }
+
+    /// Counts the branch of point `point` and puts its code in `branches`.
+    #[inline]
+    fn count(&mut self, branch: Branch, point: usize) {
+        let code = match branch {
             Branch::Loading => {
-                loading += 1;
+                self.loading += 1;
                 1
             }
             Branch::Unloading => {
-                unloading += 1;
+                self.unloading += 1;
                 2
             }
             Branch::Contact => {
-                contact += 1;
+                self.contact += 1;
                 3
             }
         };
-        branches |= code << (2 * point);
-        let wl = w * half_l;
+        self.branches |= code << (2 * point);
+    }
+
+    /// Adds the point with shape values `shape`, weight `wl = w_i l_e/2`, rotation `r`
+    /// and law response `p` (eqs. 32-37, 45-47): `wl N t_g` to `F_B` (eqs. 30, 38-39),
+    /// `wl (N N^T) (x) R^T C_i R` to `A` (eqs. 41-44).
+    #[inline]
+    fn add(&mut self, shape: [f64; 2], wl: f64, r: &Matrix2<f64>, p: &LawPoint) {
         let tg = r.transpose() * p.traction;
         let cg = r.transpose() * p.matrix * r;
         for (i, &ni) in shape.iter().enumerate() {
             let f = tg * (wl * ni);
-            fb[2 * i] += f[0];
-            fb[2 * i + 1] += f[1];
+            self.fb[2 * i] += f[0];
+            self.fb[2 * i + 1] += f[1];
             for (j, &nj) in shape.iter().enumerate() {
-                let mut blk = a.fixed_view_mut::<2, 2>(2 * i, 2 * j);
+                let mut blk = self.a.fixed_view_mut::<2, 2>(2 * i, 2 * j);
                 blk += cg * (wl * ni * nj);
             }
         }
     }
 
-    let mut force = SVector::<f64, 8>::zeros();
-    force.fixed_rows_mut::<4>(0).copy_from(&(-fb));
-    force.fixed_rows_mut::<4>(4).copy_from(&fb);
-    let mut stiffness = SMatrix::<f64, 8, 8>::zeros();
-    stiffness.fixed_view_mut::<4, 4>(0, 0).copy_from(&a);
-    stiffness.fixed_view_mut::<4, 4>(0, 4).copy_from(&(-a));
-    stiffness.fixed_view_mut::<4, 4>(4, 0).copy_from(&(-a));
-    stiffness.fixed_view_mut::<4, 4>(4, 4).copy_from(&a);
-
-    InterfaceResponse {
-        force,
-        stiffness,
-        loading,
-        unloading,
-        contact,
-        branches,
+    /// The element's force `F = [-F_B, F_B]` (eq. 39) and tangent
+    /// `K = [[A, -A], [-A, A]]` (eq. 41), both sides from `B` (see the module doc).
+    #[inline]
+    fn response(self) -> InterfaceResponse {
+        let (fb, a) = (self.fb, self.a);
+        let mut force = SVector::<f64, 8>::zeros();
+        force.fixed_rows_mut::<4>(0).copy_from(&(-fb));
+        force.fixed_rows_mut::<4>(4).copy_from(&fb);
+        let mut stiffness = SMatrix::<f64, 8, 8>::zeros();
+        stiffness.fixed_view_mut::<4, 4>(0, 0).copy_from(&a);
+        stiffness.fixed_view_mut::<4, 4>(0, 4).copy_from(&(-a));
+        stiffness.fixed_view_mut::<4, 4>(4, 0).copy_from(&(-a));
+        stiffness.fixed_view_mut::<4, 4>(4, 4).copy_from(&a);
+        InterfaceResponse {
+            force,
+            stiffness,
+            loading: self.loading,
+            unloading: self.unloading,
+            contact: self.contact,
+            branches: self.branches,
+        }
     }
 }
 
