@@ -83,7 +83,7 @@
 //! after [`MAX_CORRECTOR`] iterations). A
 //! path traced back past the start of the whole strain history
 //! (`t < -(|eps_0| / |Delta eps| + 1)`) is lost: it has left the snap-back for a branch
-//! that runs away (measured: an unloading branch followed to `t = -5e5` over 400 points).
+//! that runs away (an unloading branch followed far back, `docs/solver.md`).
 //! So is a trace that only creeps on: more than [`CRAWL_ATTEMPTS`] attempts in a row on
 //! arcs under [`CRAWL_FRACTION`] of the first.
 
@@ -110,10 +110,8 @@ const MIN_LENGTH: f64 = 1e-4;
 /// The path is lost, too, after more than `CRAWL_ATTEMPTS` attempts in a row (converged
 /// or not) on arcs shorter than `CRAWL_FRACTION` of the first: converged points reset the
 /// cuts, so a trace can creep along a corner of the path, alternating tiny points and
-/// failures, without ever reaching [`MIN_LENGTH`] (measured: about 100 points, 397
-/// factorizations, over 1 % of one increment; counting only converged points on arcs
-/// under 1/100 of the first, one trace still crept over about 40 attempts, 200
-/// factorizations: `docs/solver.md`).
+/// failures, without ever reaching [`MIN_LENGTH`] (`docs/solver.md`, "Path-following
+/// limits").
 const CRAWL_FRACTION: f64 = 0.1;
 const CRAWL_ATTEMPTS: u32 = 8;
 /// Failed attempts in a row at one arc point after which the next attempt goes the other
@@ -124,8 +122,8 @@ const CORNER_CUTS: u32 = 3;
 const CORNER_JUMP: f64 = 4.0;
 /// A point reached the other way round a corner is kept only if at least this fraction
 /// of the arc point's loading points still load there (and at least one): fewer, and it
-/// lies on the nearly elastic unloading branch of the arc point (measured: 1 of 80
-/// points loading, and the trace ran back to `t = -8.5`, `docs/solver.md`).
+/// lies on the nearly elastic unloading branch of the arc point (`docs/solver.md`,
+/// "Path-following limits").
 const CORNER_LOADING: f64 = 0.1;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;

@@ -1,0 +1,139 @@
+//! Comments in `src/` say what the code does and why: no issue numbers, no measured
+//! figures (speed-ups, timings, "measured ..." with a number) and no history of what was
+//! tried. Measurements belong in `docs/`, history in the CHANGELOG and commit messages.
+//!
+//! The rules are patterns over comment lines (`//`, `///`, `//!`), each with the reason it
+//! exists; a match names the file and line.
+
+use std::path::Path;
+
+/// A comment-line rule: the phrase it refuses, and a predicate on the lowercase text.
+struct Rule {
+    what: &'static str,
+    matches: fn(&str) -> bool,
+}
+
+fn has_digit(s: &str) -> bool {
+    s.chars().any(|c| c.is_ascii_digit())
+}
+
+/// `issue 12`, `issue #12`.
+fn issue_number(s: &str) -> bool {
+    s.match_indices("issue").any(|(i, _)| {
+        let rest = s[i + 5..].trim_start().trim_start_matches('#');
+        rest.starts_with(|c: char| c.is_ascii_digit())
+    })
+}
+
+/// A timing with its unit: `0.5 ms`, `12us`, `3 µs`.
+fn timing(s: &str) -> bool {
+    let b = s.as_bytes();
+    ["ms", "us", "µs"].iter().any(|unit| {
+        s.match_indices(unit).any(|(i, _)| {
+            let before = s[..i].trim_end();
+            let after = &s[i + unit.len()..];
+            let ends_word = !after.starts_with(|c: char| c.is_alphanumeric());
+            let number_before = before.ends_with(|c: char| c.is_ascii_digit());
+            let starts_word = i == 0 || !(b[i - 1] as char).is_alphabetic();
+            ends_word && number_before && starts_word
+        })
+    })
+}
+
+const RULES: &[Rule] = &[
+    Rule {
+        what: "an issue number (history: commit messages and the CHANGELOG)",
+        matches: issue_number,
+    },
+    Rule {
+        what: "a speed comparison with a figure (docs/)",
+        matches: |s| has_digit(s) && (s.contains("faster") || s.contains("slower")),
+    },
+    Rule {
+        what: "a timing figure (docs/)",
+        matches: timing,
+    },
+    Rule {
+        what: "a measured figure (docs/)",
+        matches: |s| s.find("measured").is_some_and(|i| has_digit(&s[i..])),
+    },
+    Rule {
+        what: "history of what was tried or reverted (CHANGELOG)",
+        matches: |s| {
+            (s.contains("tried") || s.contains("reverted") || s.contains("used to"))
+                && (s.contains("dropped") || s.contains("removed") || s.contains("not kept"))
+        },
+    },
+];
+
+fn comment(line: &str) -> Option<&str> {
+    let t = line.trim_start();
+    t.starts_with("//")
+        .then(|| t.trim_start_matches('/').trim_start_matches('!'))
+}
+
+fn check(path: &Path, offences: &mut Vec<String>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    for (k, line) in text.lines().enumerate() {
+        let Some(c) = comment(line) else { continue };
+        let lower = c.to_lowercase();
+        for rule in RULES.iter().filter(|r| (r.matches)(&lower)) {
+            offences.push(format!(
+                "{}:{}: {}: {}",
+                path.display(),
+                k + 1,
+                rule.what,
+                c.trim()
+            ));
+        }
+    }
+}
+
+fn walk(dir: &Path, offences: &mut Vec<String>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            walk(&path, offences);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            check(&path, offences);
+        }
+    }
+}
+
+#[test]
+fn comments_in_src_hold_no_history_issue_numbers_or_measured_figures() {
+    let mut offences = Vec::new();
+    walk(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("src"),
+        &mut offences,
+    );
+    assert!(
+        offences.is_empty(),
+        "{} comment lines:\n{}",
+        offences.len(),
+        offences.join("\n")
+    );
+}
+
+#[test]
+fn the_rules_catch_what_they_name() {
+    let caught = |s: &str| RULES.iter().any(|r| (r.matches)(&s.to_lowercase()));
+    for bad in [
+        "see Issue 13",
+        "as in issue #7",
+        "supernodal is 2x faster than simplicial",
+        "the update takes 0.54 ms",
+        "measured 1e2 times the reference",
+        "tried X, reverted and dropped",
+    ] {
+        assert!(caught(bad), "{bad}");
+    }
+    for fine in [
+        "the remedies are tried in this order",
+        "sums over 3 columns",
+        "the jump is measured from the reference configuration",
+        "eq. 36 of the paper",
+    ] {
+        assert!(!caught(fine), "{fine}");
+    }
+}
