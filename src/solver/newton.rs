@@ -173,7 +173,6 @@ struct NewtonLoop<'a, 'p> {
 impl<'a, 'p> NewtonLoop<'a, 'p> {
     /// Evaluates the start iterate `x` (unless `evaluated` already did with the
     /// consistent tangent) with the contact status of the first iteration.
-    #[allow(clippy::too_many_arguments)]
     fn start(
         problem: &'a Problem<'p>,
         settings: &'a Settings,
