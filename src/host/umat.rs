@@ -6,7 +6,7 @@
 //! - **`STATEV` mode** (`NSTATV` >= the model's [`Model::statev_len`](crate::Model::statev_len), which `rve info`
 //!   prints as `umat_nstatv`; the recommended mode). The point's committed RVE state is
 //!   `STATEV(1:umat_nstatv)`: its core (strain, interface history, contact status,
-//!   IMPL-EX's data) as integer-valued doubles with a checksum ([`statev`]); all zeros is
+//!   IMPL-EX's data) as integer-valued doubles with a checksum (`statev`); all zeros is
 //!   a virgin RVE. Each call solves from the state `STATEV` holds, at the total strain
 //!   `STRAN + DSTRAN` and the time increment `DTIME`, and writes the trial's core back.
 //!   The host keeps the values of the converged increment, hands the start-of-increment
