@@ -318,6 +318,16 @@ impl Point {
 type MaterialEntry = Result<Arc<Material>, Arc<Error>>;
 type PointRef = Arc<Mutex<Point>>;
 
+/// Asks the host for `ratio` times the increment through `PNEWDT`, keeping a smaller
+/// request of an earlier point of the increment. A value that is not positive is no
+/// request: Abaqus hands `PNEWDT` in large, CalculiX as -1 (and any positive value it
+/// gets back cuts the increment).
+pub fn request_step_ratio(pnewdt: &mut f64, ratio: f64) {
+    if !(*pnewdt > 0.0 && *pnewdt <= ratio) {
+        *pnewdt = ratio;
+    }
+}
+
 /// A failed call before it is reported: the error, whether it is reported for the first
 /// time, and the material when known (for the elastic DDSDDE).
 struct Failed {
@@ -333,7 +343,7 @@ fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
         return;
     }
     let ratio = r.report.suggested_step_ratio();
-    *out.pnewdt = out.pnewdt.min(ratio);
+    request_step_ratio(out.pnewdt, ratio);
     STEP_NOTE.call_once(|| {
         eprintln!(
             "mesorve: element {}, point {}: the RVE's answer depends on the size of this \
@@ -630,7 +640,7 @@ impl Umat {
             } => suggested_step_ratio,
             _ => FAILURE_STEP_RATIO,
         };
-        *out.pnewdt = pnewdt;
+        request_step_ratio(out.pnewdt, pnewdt);
         let n = c.hypothesis.ntens();
         if out.ddsdde.len() == n * n {
             match material {
