@@ -124,3 +124,15 @@ fn searched_list(paths: &[PathBuf]) -> String {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// `Ok` when `value` is a positive finite number, else [`Error::Scene`] naming `key`.
+pub fn require_positive(key: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::scene(
+            key,
+            format!("must be a positive finite number, got {value}"),
+        ))
+    }
+}

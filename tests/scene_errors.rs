@@ -92,7 +92,29 @@ fn missing_keys_are_named() {
     );
     assert_mentions(
         &error_of(&[("itz = { sigma_c = 4.0, delta_c = 0.0002, beta = 0.707, penalty = { lambda_p = 1e5 } }\n", "")]),
-        &["materials.itz", "missing"],
+        &["materials.itz", "missing", "materials.linear_itz"],
+    );
+}
+
+/// The interface laws come from one registry: two laws given, or a bad constant of
+/// either, are named by their keys.
+#[test]
+fn interface_laws_are_checked_by_key() {
+    let itz =
+        "itz = { sigma_c = 4.0, delta_c = 0.0002, beta = 0.707, penalty = { lambda_p = 1e5 } }\n";
+    let linear =
+        |ks: &str| format!("linear_itz = {{ shear_stiffness = {ks}, normal_stiffness = 1e4 }}\n");
+    assert_mentions(
+        &error_of(&[(itz, &format!("{itz}{}", linear("1e4")))]),
+        &["materials.linear_itz", "one interface law", "not several"],
+    );
+    assert_mentions(
+        &error_of(&[(itz, &linear("-1.0"))]),
+        &["materials.linear_itz.shear_stiffness", "positive"],
+    );
+    assert_mentions(
+        &error_of(&[("lambda_p = 1e5 }", "lambda_p = 1e5, stiffness = 1e6 }")]),
+        &["materials.itz.penalty", "exactly one"],
     );
 }
 

@@ -20,13 +20,16 @@
 use crate::mesh::Mesh;
 
 /// The kinematic constraint on the fluctuation, stiffest first (the spaces are nested).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The scene's `boundary.kind` is this value, by its snake_case name.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum BoundaryCondition {
     /// `u~ = 0` everywhere.
     Taylor,
     /// `u~ = 0` on the boundary (eq. 12).
     Linear,
     /// `u~(y+) = u~(y-)` (eq. 10).
+    #[default]
     Periodic,
     /// `int u~ (x) n dA = 0` on the boundary (eq. 11).
     Minimal,

@@ -121,12 +121,15 @@
 //! * Non-finite jumps give non-finite tractions (the caller's residual check catches them);
 //!   nothing here panics.
 //!
-//! Preconditions (not checked here; the scene validates them): `sigma_c > 0`,
-//! `delta_c > 0`, `beta >= 0`, penalty `> 0`, `length > 0`.
+//! Preconditions (not checked by the law; [`ItzSpec`], the scene's table, checks them):
+//! `sigma_c > 0`, `delta_c > 0`, `beta >= 0`, penalty `> 0`, `length > 0`.
+
+use std::sync::Arc;
 
 use nalgebra::{Matrix2, Vector2};
 
-use super::law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
+use super::law::{Branch, InterfaceLaw, InterfaceLawSpec, LawPoint, PointMeasures, TangentKind};
+use crate::error::{require_positive, Error, Result};
 
 /// Contact penalty on a closed interface point (eqs. 36-37).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -532,6 +535,70 @@ impl InterfaceLaw for CohesiveLaw {
                  equilibrium; solver.contact_status = \"active_set\" (the default) holds \
                  the status within a Newton iteration"
             )
+        })
+    }
+}
+
+/// The cohesive-contact law of the ITZ (paper eqs. 20-25, 36-37).
+#[derive(Clone, Copy, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ItzSpec {
+    /// Maximum cohesive normal traction.
+    pub sigma_c: f64,
+    /// Characteristic opening.
+    pub delta_c: f64,
+    /// Shear-to-normal weight in the effective opening (eq. 20).
+    pub beta: f64,
+    pub penalty: PenaltySpec,
+    /// What carries the shear of a closed point: `"penalty"` (the paper's eq. 47, default)
+    /// or `"cohesive"` (Ortiz-Pandolfi: normal penalty only, continuous at closure). See
+    /// [`ContactShear`].
+    #[serde(default)]
+    pub contact_shear: ContactShear,
+}
+
+/// Contact penalty, exactly one of:
+/// * `{ lambda_p = ... }`: the paper's `t = lambda_p l_e delta` (eqs. 36-37), the form the
+///   shipped scenes use, so they reproduce the paper;
+/// * `{ stiffness = ... }`: a mesh-independent stiffness per unit area, `t = k delta`.
+#[derive(Clone, Copy, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PenaltySpec {
+    #[serde(default)]
+    pub lambda_p: Option<f64>,
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+}
+
+
+impl InterfaceLawSpec for ItzSpec {
+    fn validate(&self, key: &str) -> Result<()> {
+        let named = |constant: &str| format!("materials.{key}.{constant}");
+        require_positive(&named("sigma_c"), self.sigma_c)?;
+        require_positive(&named("delta_c"), self.delta_c)?;
+        require_positive(&named("beta"), self.beta)?;
+        match (self.penalty.lambda_p, self.penalty.stiffness) {
+            (Some(l), None) => require_positive(&named("penalty.lambda_p"), l),
+            (None, Some(k)) => require_positive(&named("penalty.stiffness"), k),
+            _ => Err(Error::scene(
+                named("penalty"),
+                "give exactly one of `lambda_p` (paper, per length) or `stiffness` (per area)",
+            )),
+        }
+    }
+
+    fn build(&self, contact: bool) -> Arc<dyn InterfaceLaw> {
+        Arc::new(CohesiveLaw {
+            sigma_c: self.sigma_c,
+            delta_c: self.delta_c,
+            beta: self.beta,
+            penalty: match (self.penalty.lambda_p, self.penalty.stiffness) {
+                (Some(lambda_p), _) => Penalty::PerLength { lambda_p },
+                (None, Some(stiffness)) => Penalty::PerArea { stiffness },
+                (None, None) => Penalty::PerArea { stiffness: 0.0 },
+            },
+            contact,
+            contact_shear: self.contact_shear,
         })
     }
 }

@@ -160,3 +160,13 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         None
     }
 }
+
+/// An interface law as a scene gives it, a table under `[materials]`: the value carries
+/// its own checks and builds its law. `scene::MaterialsSpec::interface_laws` registers
+/// each one under its key; the scene's validation and the model read them through it.
+pub trait InterfaceLawSpec: std::fmt::Debug {
+    /// Checks the constants; errors name the key `materials.<key>.<constant>`.
+    fn validate(&self, key: &str) -> crate::error::Result<()>;
+    /// The law; `contact` is the scene's `effects.contact`.
+    fn build(&self, contact: bool) -> std::sync::Arc<dyn InterfaceLaw>;
+}

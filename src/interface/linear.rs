@@ -4,9 +4,12 @@
 //! series with the bulk), which makes it a verification case for the element and the
 //! solver independent of the cohesive law.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix2, Vector2};
 
-use super::law::{Branch, InterfaceLaw, LawPoint, TangentKind};
+use super::law::{Branch, InterfaceLaw, InterfaceLawSpec, LawPoint, TangentKind};
+use crate::error::{require_positive, Result};
 
 /// Constant interface stiffnesses per unit area (stress per length).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +55,29 @@ impl InterfaceLaw for LinearInterface {
         _closed: bool,
     ) -> bool {
         true
+    }
+}
+
+/// A linear elastic interface `t = diag(k_s, k_n) delta`, stiffnesses per unit area.
+#[derive(Clone, Copy, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearItzSpec {
+    pub shear_stiffness: f64,
+    pub normal_stiffness: f64,
+}
+
+
+impl InterfaceLawSpec for LinearItzSpec {
+    fn validate(&self, key: &str) -> Result<()> {
+        require_positive(&format!("materials.{key}.shear_stiffness"), self.shear_stiffness)?;
+        require_positive(&format!("materials.{key}.normal_stiffness"), self.normal_stiffness)
+    }
+
+    fn build(&self, _contact: bool) -> Arc<dyn InterfaceLaw> {
+        Arc::new(LinearInterface {
+            shear: self.shear_stiffness,
+            normal: self.normal_stiffness,
+        })
     }
 }
 

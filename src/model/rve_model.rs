@@ -4,7 +4,7 @@
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::from_scene::{boundary_condition, interface_law, solver_settings};
+use super::from_scene::{interface_law, solver_settings};
 use super::microstructure::build_microstructure;
 use crate::assembly::{Discretization, DiscretizationSpec};
 use crate::constraint::BoundaryCondition;
@@ -73,7 +73,7 @@ impl Model {
     /// Builds the model on an already built microstructure (tests, custom meshes).
     pub fn from_mesh(scene: &Scene, microstructure: Microstructure) -> Result<Self> {
         let spec = &scene.spec;
-        let boundary = boundary_condition(spec.boundary.kind);
+        let boundary = spec.boundary.kind;
         let mesh: &Mesh = &microstructure.mesh;
         if boundary == BoundaryCondition::Periodic && !mesh.boundary.sides_match {
             return Err(Error::scene(

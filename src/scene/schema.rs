@@ -4,8 +4,11 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::constraint::BoundaryCondition;
 use crate::element::InterfaceQuadrature;
 use crate::geometry::{Explicit, RandomSpec};
+use crate::interface::InterfaceLawSpec;
+pub use crate::interface::{ItzSpec, LinearItzSpec, PenaltySpec};
 use crate::material::{Analysis, IsotropicElastic};
 
 /// The whole scene file.
@@ -162,47 +165,23 @@ pub struct MaterialsSpec {
     pub linear_itz: Option<LinearItzSpec>,
 }
 
-/// A linear elastic interface `t = diag(k_s, k_n) delta`, stiffnesses per unit area.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct LinearItzSpec {
-    pub shear_stiffness: f64,
-    pub normal_stiffness: f64,
+impl MaterialsSpec {
+    /// Every interface law a scene can give, by its key under `[materials]`, with its
+    /// table when given: the one place a law is registered (a new law adds its field
+    /// above and a line here).
+    pub fn interface_laws(&self) -> [(&'static str, Option<&dyn InterfaceLawSpec>); 2] {
+        [
+            ("itz", self.itz.as_ref().map(|s| s as &dyn InterfaceLawSpec)),
+            (
+                "linear_itz",
+                self.linear_itz.as_ref().map(|s| s as &dyn InterfaceLawSpec),
+            ),
+        ]
+    }
 }
 
 /// Isotropic linear elasticity: `{ young, poisson }` (the material type itself).
 pub type ElasticSpec = IsotropicElastic;
-
-/// The cohesive-contact law of the ITZ (paper eqs. 20-25, 36-37).
-#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ItzSpec {
-    /// Maximum cohesive normal traction.
-    pub sigma_c: f64,
-    /// Characteristic opening.
-    pub delta_c: f64,
-    /// Shear-to-normal weight in the effective opening (eq. 20).
-    pub beta: f64,
-    pub penalty: PenaltySpec,
-    /// What carries the shear of a closed point: `"penalty"` (the paper's eq. 47, default)
-    /// or `"cohesive"` (Ortiz-Pandolfi: normal penalty only, continuous at closure). See
-    /// `crate::interface::ContactShear`.
-    #[serde(default)]
-    pub contact_shear: crate::interface::ContactShear,
-}
-
-/// Contact penalty, exactly one of:
-/// * `{ lambda_p = ... }`: the paper's `t = lambda_p l_e delta` (eqs. 36-37), the form the
-///   shipped scenes use, so they reproduce the paper;
-/// * `{ stiffness = ... }`: a mesh-independent stiffness per unit area, `t = k delta`.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct PenaltySpec {
-    #[serde(default)]
-    pub lambda_p: Option<f64>,
-    #[serde(default)]
-    pub stiffness: Option<f64>,
-}
 
 /// `[effects]`: what the RVE simulates. Effects that are off cost nothing.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize)]
@@ -233,16 +212,9 @@ pub struct BoundarySpec {
     pub kind: BoundaryKind,
 }
 
-/// Taylor >= linear >= periodic >= minimal (stiffest first).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum BoundaryKind {
-    Taylor,
-    Linear,
-    #[default]
-    Periodic,
-    Minimal,
-}
+/// `boundary.kind`: the boundary condition itself, its snake_case name the scene's value
+/// (`taylor`, `linear`, `periodic` (default), `minimal`).
+pub type BoundaryKind = BoundaryCondition;
 
 /// `[solver]`: the RVE Newton-Raphson settings.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize)]

@@ -2,7 +2,7 @@
 
 use super::path::MAX_STRAIN;
 use super::schema::*;
-use crate::error::{Error, Result};
+use crate::error::{require_positive, Error, Result};
 use crate::geometry::{Explicit, Orientation, RandomSpec, ShapeKind};
 
 /// Densest random packing we attempt; above it random sequential placement jams.
@@ -14,14 +14,7 @@ pub use crate::mesh::MAX_TRIANGLES;
 pub const MAX_PATH_INCREMENTS: u64 = 1_000_000;
 
 fn positive(key: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::scene(
-            key,
-            format!("must be a positive finite number, got {v}"),
-        ))
-    }
+    require_positive(key, v)
 }
 
 fn non_negative(key: &str, v: f64) -> Result<()> {
@@ -79,37 +72,34 @@ impl SceneSpec {
                 "contact acts on ITZ elements, which need effects.cohesive = true",
             ));
         }
-        let materials = &self.materials;
-        if materials.itz.is_some() && materials.linear_itz.is_some() {
-            return Err(Error::scene(
-                "materials.linear_itz",
-                "give either materials.itz or materials.linear_itz, not both",
-            ));
-        }
-        if self.effects.cohesive
-            && has_inclusions
-            && materials.itz.is_none()
-            && materials.linear_itz.is_none()
-        {
-            return Err(Error::scene(
-                "materials.itz",
-                "missing: effects.cohesive is on and the geometry has inclusions",
-            ));
-        }
-        if let Some(itz) = &materials.itz {
-            validate_itz(itz)?;
-        }
-        if let Some(linear) = &materials.linear_itz {
-            positive(
-                "materials.linear_itz.shear_stiffness",
-                linear.shear_stiffness,
-            )?;
-            positive(
-                "materials.linear_itz.normal_stiffness",
-                linear.normal_stiffness,
-            )?;
-        }
-        Ok(())
+        validate_interface_laws(&self.materials, self.effects.cohesive && has_inclusions)
+    }
+}
+
+/// At most one interface law, one when `required`, each valid (its own checks).
+fn validate_interface_laws(materials: &MaterialsSpec, required: bool) -> Result<()> {
+    let laws = materials.interface_laws();
+    let keys: Vec<String> = laws
+        .iter()
+        .map(|(key, _)| format!("materials.{key}"))
+        .collect();
+    let given: Vec<_> = laws
+        .iter()
+        .filter_map(|&(key, law)| Some((key, law?)))
+        .collect();
+    match given.as_slice() {
+        [] if required => Err(Error::scene(
+            &keys[0],
+            format!(
+                "missing: effects.cohesive is on and the geometry has inclusions (give one of {})",
+                keys.join(", ")
+            ),
+        )),
+        [_, (second, _), ..] => Err(Error::scene(
+            format!("materials.{second}"),
+            format!("give one interface law of {}, not several", keys.join(", ")),
+        )),
+        _ => given.iter().try_for_each(|(key, law)| law.validate(key)),
     }
 }
 
@@ -257,20 +247,6 @@ fn validate_path(path: &[PathSegment]) -> Result<()> {
         }
     }
     Ok(())
-}
-
-fn validate_itz(itz: &ItzSpec) -> Result<()> {
-    positive("materials.itz.sigma_c", itz.sigma_c)?;
-    positive("materials.itz.delta_c", itz.delta_c)?;
-    positive("materials.itz.beta", itz.beta)?;
-    match (itz.penalty.lambda_p, itz.penalty.stiffness) {
-        (Some(l), None) => positive("materials.itz.penalty.lambda_p", l),
-        (None, Some(k)) => positive("materials.itz.penalty.stiffness", k),
-        _ => Err(Error::scene(
-            "materials.itz.penalty",
-            "give exactly one of `lambda_p` (paper, per length) or `stiffness` (per area)",
-        )),
-    }
 }
 
 fn validate_random(r: &RandomSpec, min_side: f64) -> Result<()> {
