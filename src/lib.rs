@@ -56,8 +56,8 @@
 //! Dependencies flow one way (`tests/layers.rs` fails on an import against this order):
 //!
 //! ```text
-//! ffi -> host -> model -> {scene, io, solver, homogenization} -> assembly -> constraint
-//!     -> {mesh, element, state} -> {geometry, material, interface} -> error
+//! ffi -> host -> model -> scene -> {io, solver, homogenization} -> assembly
+//!     -> constraint -> {mesh, element, state} -> {geometry, material, interface} -> error
 //! ```
 //!
 //! `model` is the edge where the scene schema becomes the numerical modules' own types

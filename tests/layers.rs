@@ -1,8 +1,8 @@
 //! The library's dependencies flow one way (the sentence in `src/lib.rs`):
 //!
 //! ```text
-//! ffi -> host -> model -> {scene, io, solver, homogenization} -> assembly -> constraint
-//!     -> {mesh, element, state} -> {geometry, material, interface} -> error
+//! ffi -> host -> model -> scene -> {io, solver, homogenization} -> assembly
+//!     -> constraint -> {mesh, element, state} -> {geometry, material, interface} -> error
 //! ```
 //!
 //! Every `crate::<module>` path in a module's source (its `use` lines and inline paths)
@@ -19,7 +19,8 @@ const LAYERS: &[&[&str]] = &[
     &["mesh", "element", "state"],
     &["constraint"],
     &["assembly"],
-    &["scene", "io", "solver", "homogenization"],
+    &["io", "solver", "homogenization"],
+    &["scene"],
     &["model"],
     &["host"],
     &["ffi"],

@@ -4,7 +4,7 @@
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::from_scene::{interface_law, solver_settings};
+use super::from_scene::interface_law;
 use super::microstructure::build_microstructure;
 use crate::assembly::{Discretization, DiscretizationSpec};
 use crate::constraint::BoundaryCondition;
@@ -102,7 +102,7 @@ impl Model {
             disc,
             hom,
             linear,
-            solver: solver_settings(&spec.solver),
+            solver: spec.solver,
             elastic_tangent: [0.0; 9],
             elastic_s_zz_tangent: [0.0; 3],
             elastic_sensitivity: Vec::new(),

@@ -10,6 +10,7 @@ use crate::geometry::{Explicit, RandomSpec};
 use crate::interface::InterfaceLawSpec;
 pub use crate::interface::{ItzSpec, LinearItzSpec, PenaltySpec};
 use crate::material::{Analysis, IsotropicElastic};
+use crate::solver::{ContactStatus, Integration, Settings};
 
 /// The whole scene file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -216,112 +217,12 @@ pub struct BoundarySpec {
 /// (`taylor`, `linear`, `periodic` (default), `minimal`).
 pub type BoundaryKind = BoundaryCondition;
 
-/// `[solver]`: the RVE Newton-Raphson settings.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SolverSpec {
-    /// Relative residual tolerance.
-    #[serde(default = "default_tolerance")]
-    pub tolerance: f64,
-    #[serde(default = "default_iterations")]
-    pub max_iterations: u32,
-    /// Backtracking line search on the residual norm.
-    #[serde(default = "yes")]
-    pub line_search: bool,
-    /// Maximum bisection depth of the macro strain increment (2^depth sub-steps).
-    #[serde(default = "default_substep_depth")]
-    pub max_substep_depth: u32,
-    /// Trace the equilibrium path through limit points (arc length) when Newton fails on
-    /// a step, before the secant iterations and bisection.
-    #[serde(default = "yes")]
-    pub path_following: bool,
-    /// Iterations allowed to the secant-then-Newton loop that takes over when plain
-    /// Newton fails on a step, before the step is bisected; 0 switches it off.
-    #[serde(default = "default_secant_iterations")]
-    pub max_secant_iterations: u32,
-    /// Modified-Newton (chord) corrections: after a Newton correction that cut the
-    /// residual at least a hundredfold, the next correction reuses its factorization
-    /// instead of factorizing the new tangent (see `solver::newton`). `false` gives
-    /// plain Newton with its quadratic rate.
-    #[serde(default = "yes")]
-    pub reuse_factorization: bool,
-    /// Second-order predictor: an increment that keeps the direction of the previous one
-    /// starts from `x_n + X_n Delta eps + s^2 e_n`, with the previous increment's
-    /// prediction error `e_n` kept in the state (see `state::PathCurvature`); `false`
-    /// predicts to first order only (`x_n + X_n Delta eps`) and keeps no curvature.
-    #[serde(default = "yes")]
-    pub second_order_predictor: bool,
-    /// When the contact status of an ITZ point (closed iff its normal jump is negative,
-    /// eqs. 36-37) is read: `"active_set"` (default) or `"per_iteration"`, see
-    /// [`ContactStatusSpec`] and `docs/contact-algorithm.md`.
-    #[serde(default)]
-    pub contact_status: ContactStatusSpec,
-    /// Answer an update without Newton when every ITZ point provably stays on the linear
-    /// branch (unloading or contact) it had at the last full solve: `sigma = D_b eps`,
-    /// exact (see `solver::fast_path`); `false` solves every update.
-    #[serde(default = "yes")]
-    pub fast_path: bool,
-    /// How the ITZ history is integrated over a host increment: `"implicit"` (default)
-    /// or `"implex"`, see [`IntegrationSpec`] and `docs/implex.md`.
-    #[serde(default)]
-    pub integration: IntegrationSpec,
-    /// Check every implicit increment that Newton lands in one step while ITZ points pass
-    /// the peak of their law against two half steps, and flag it when they reach another
-    /// equilibrium (the answer depends on the host's step: `RveInfo` and the UMAT then
-    /// ask for a smaller step, `PNEWDT` 0.5). `false` skips the check.
-    #[serde(default = "yes")]
-    pub step_check: bool,
-}
-
-/// `solver.integration`: how the ITZ law's history is integrated over a step.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum IntegrationSpec {
-    /// Backward Euler: the history of the step's end, found by Newton with path
-    /// following through the RVE's snap-backs.
-    #[default]
-    Implicit,
-    /// IMPL-EX (Oliver, Huespe & Cante 2008): the history extrapolated from the last two
-    /// converged steps, the contact status of the last one. The RVE is linear within a
-    /// step: one factorization per step, a symmetric positive definite tangent, no
-    /// snap-back; the stress lags the implicit law by an error of first order in the step.
-    Implex,
-}
-
-/// `solver.contact_status`: when the solver reads the contact status of the ITZ points
-/// from their gaps. Matters only with the paper's contact law
-/// (`materials.itz.contact_shear = "penalty"`), whose shear traction jumps at closure.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ContactStatusSpec {
-    /// Held within each Newton iteration and read again between iterations; a point may
-    /// switch at most twice per Newton loop, then keeps its status (an active-set
-    /// strategy).
-    #[default]
-    ActiveSet,
-    /// Read from the gap at every evaluation of the law. The residual then jumps where a
-    /// sliding point closes, and some paths have no equilibrium at all.
-    PerIteration,
-}
-
-impl Default for SolverSpec {
-    fn default() -> Self {
-        SolverSpec {
-            tolerance: default_tolerance(),
-            max_iterations: default_iterations(),
-            line_search: true,
-            max_substep_depth: default_substep_depth(),
-            path_following: true,
-            max_secant_iterations: default_secant_iterations(),
-            reuse_factorization: true,
-            second_order_predictor: true,
-            contact_status: ContactStatusSpec::ActiveSet,
-            fast_path: true,
-            integration: IntegrationSpec::Implicit,
-            step_check: true,
-        }
-    }
-}
+/// `[solver]`: the solver's own settings, by their names (see `solver::Settings`).
+pub type SolverSpec = Settings;
+/// `solver.integration`.
+pub type IntegrationSpec = Integration;
+/// `solver.contact_status`.
+pub type ContactStatusSpec = ContactStatus;
 
 /// `[[path]]`: go linearly from the previous strain (initially zero) to `to` in
 /// `increments` equal steps. Strain in Voigt order with engineering shear.
@@ -337,16 +238,4 @@ fn yes() -> bool {
 }
 fn default_min_angle() -> f64 {
     25.0
-}
-fn default_tolerance() -> f64 {
-    1e-6
-}
-fn default_iterations() -> u32 {
-    40
-}
-fn default_substep_depth() -> u32 {
-    10
-}
-fn default_secant_iterations() -> u32 {
-    100
 }

@@ -1,57 +1,133 @@
 //! The solver's own settings and the types of its API: what a caller asks for and what an
-//! update reports. The scene's `[solver]` table is translated into [`Settings`] by `model`.
+//! update reports. The scene's `[solver]` table is [`Settings`] itself.
 
 /// Settings of the RVE equilibrium solve (see `increment` for the remedy ladder they
-/// switch on and off).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// switch on and off). This is also the scene's `[solver]` table, key by key, with its
+/// defaults: a new switch is declared here once.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
 pub struct Settings {
-    /// Newton converges when `||R|| <= tolerance * max(||G eps||, 1e-8 ||G||)`.
+    /// Relative residual tolerance: Newton converges when
+    /// `||R|| <= tolerance * max(||G eps||, 1e-8 ||G||)`.
+    #[serde(default = "default_tolerance")]
     pub tolerance: f64,
     /// Newton iterations per attempt.
+    #[serde(default = "default_iterations")]
     pub max_iterations: u32,
     /// Backtracking line search on `||R||` when the full step increases it.
+    #[serde(default = "yes")]
     pub line_search: bool,
-    /// Bisections of the macro strain increment before the update fails.
+    /// Maximum bisection depth of the macro strain increment (2^depth sub-steps) before
+    /// the update fails.
+    #[serde(default = "default_substep_depth")]
     pub max_substep_depth: u32,
-    /// Trace the equilibrium path through limit points when Newton fails on a step.
+    /// Trace the equilibrium path through limit points (arc length) when Newton fails on
+    /// a step, before the secant iterations and bisection.
+    #[serde(default = "yes")]
     pub path_following: bool,
-    /// Iterations of the secant-then-Newton remedy; 0 switches it off.
+    /// Iterations allowed to the secant-then-Newton loop that takes over when plain
+    /// Newton fails on a step, before the step is bisected; 0 switches it off.
+    #[serde(default = "default_secant_iterations")]
     pub max_secant_iterations: u32,
-    /// Chord corrections after a hundredfold Newton contraction (see `newton`).
+    /// Modified-Newton (chord) corrections: after a Newton correction that cut the
+    /// residual at least a hundredfold, the next correction reuses its factorization
+    /// instead of factorizing the new tangent (see `newton`). `false` gives plain Newton
+    /// with its quadratic rate.
+    #[serde(default = "yes")]
     pub reuse_factorization: bool,
-    /// The second-order term of the predictor (see `predictor`).
+    /// Second-order predictor: an increment that keeps the direction of the previous one
+    /// starts from `x_n + X_n Delta eps + s^2 e_n`, with the previous increment's
+    /// prediction error `e_n` kept in the state (see `state::PathCurvature`); `false`
+    /// predicts to first order only (`x_n + X_n Delta eps`) and keeps no curvature.
+    #[serde(default = "yes")]
     pub second_order_predictor: bool,
-    /// When the contact status of the interface points is read (see `contact`).
+    /// When the contact status of an ITZ point (closed iff its normal jump is negative,
+    /// eqs. 36-37) is read: `"active_set"` (default) or `"per_iteration"` (see `contact`
+    /// and `docs/contact-algorithm.md`).
+    #[serde(default)]
     pub contact_status: ContactStatus,
-    /// Answer updates that keep every interface point on its linear branch without
-    /// Newton (see `fast_path`).
+    /// Answer an update without Newton when every ITZ point provably stays on the linear
+    /// branch (unloading or contact) it had at the last full solve: `sigma = D_b eps`,
+    /// exact (see `fast_path`); `false` solves every update.
+    #[serde(default = "yes")]
     pub fast_path: bool,
-    /// How the interface history is integrated over a step (see `implex`).
+    /// How the ITZ history is integrated over a host increment: `"implicit"` (default)
+    /// or `"implex"` (see `implex` and `docs/implex.md`).
+    #[serde(default)]
     pub integration: Integration,
-    /// Check an implicit increment that Newton landed over interface points passing
-    /// their peak against two half steps (see `step_check`).
+    /// Check every implicit increment that Newton lands in one step while ITZ points pass
+    /// the peak of their law against two half steps, and flag it when they reach another
+    /// equilibrium (the answer depends on the host's step: `RveInfo` and the UMAT then
+    /// ask for a smaller step, `PNEWDT` 0.5). `false` skips the check (see `step_check`).
+    #[serde(default = "yes")]
     pub step_check: bool,
 }
 
-/// How the interface history is integrated over a host increment.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            tolerance: default_tolerance(),
+            max_iterations: default_iterations(),
+            line_search: true,
+            max_substep_depth: default_substep_depth(),
+            path_following: true,
+            max_secant_iterations: default_secant_iterations(),
+            reuse_factorization: true,
+            second_order_predictor: true,
+            contact_status: ContactStatus::ActiveSet,
+            fast_path: true,
+            integration: Integration::Implicit,
+            step_check: true,
+        }
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_tolerance() -> f64 {
+    1e-6
+}
+fn default_iterations() -> u32 {
+    40
+}
+fn default_substep_depth() -> u32 {
+    10
+}
+fn default_secant_iterations() -> u32 {
+    100
+}
+
+/// `solver.integration`: how the ITZ law's history is integrated over a host increment.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Integration {
-    /// Backward Euler, solved by Newton and path following.
+    /// Backward Euler: the history of the step's end, found by Newton with path
+    /// following through the RVE's snap-backs.
     #[default]
     Implicit,
-    /// IMPL-EX: the extrapolated history, linear within a step (see `implex`).
+    /// IMPL-EX (Oliver, Huespe & Cante 2008): the history extrapolated from the last two
+    /// converged steps, the contact status of the last one. The RVE is linear within a
+    /// step: one factorization per step, a symmetric positive definite tangent, no
+    /// snap-back; the stress lags the implicit law by an error of first order in the step
+    /// (see `implex`).
     Implex,
 }
 
-/// When the solver reads the contact status of the interface points from their gaps
-/// (laws with [`crate::interface::InterfaceLaw::has_contact_status`]; see `contact`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// `solver.contact_status`: when the solver reads the contact status of the ITZ points
+/// from their gaps (laws with [`crate::interface::InterfaceLaw::has_contact_status`]; see
+/// `contact`). Matters only with the paper's contact law
+/// (`materials.itz.contact_shear = "penalty"`), whose shear traction jumps at closure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ContactStatus {
-    /// Held within each Newton iteration, read again between iterations, at most
-    /// [`super::contact::MAX_SWITCHES`] switches per point and Newton loop.
+    /// Held within each Newton iteration and read again between iterations; a point may
+    /// switch at most [`super::contact::MAX_SWITCHES`] times per Newton loop, then keeps
+    /// its status (an active-set strategy).
     #[default]
     ActiveSet,
-    /// Read at every evaluation of the law.
+    /// Read from the gap at every evaluation of the law. The residual then jumps where a
+    /// sliding point closes, and some paths have no equilibrium at all.
     PerIteration,
 }
 
