@@ -207,8 +207,8 @@ def intro(w, record):
     w("The other half of robustness, bad input and long runs (fuzzed scenes, Gmsh files, call")
     w("sequences and checkpoints, the checksummed state format, the threaded soak with its")
     w("memory and replay checks, sanitizers and valgrind), is measured in")
-    w("`docs/reliability.md`. Cost candidates for the snap-back increments, measured and not")
-    w("yet kept, are in `docs/solver.md`.\n")
+    w("`docs/reliability.md`. Cost candidates for the snap-back increments that were measured")
+    w("and not kept are in `CHANGELOG.md` (0.3.0, \"Measured and not kept\").\n")
 
 
 def group_names(results):
