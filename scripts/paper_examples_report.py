@@ -2,7 +2,8 @@
 
 Usage: python3 scripts/paper_examples_report.py WORK OUT.md SVG_DIR
 
-WORK holds one directory per run (response.csv of `rve run`, status: "ok" or the error).
+WORK holds one directory per run (response.csv of `rve run`, status: "ok" or the error)
+and provenance.json, the study's start as scripts/study_provenance.py records it.
 Standard library only; the plots are plain SVG. The verdicts use the same measures and
 thresholds as tests/paper_examples.rs, which asserts them.
 """
@@ -11,6 +12,8 @@ import csv
 import math
 import os
 import sys
+
+import study_provenance
 
 WORK, MD, SVG_DIR = sys.argv[1:4]
 SVG_REL = os.path.relpath(SVG_DIR, os.path.dirname(MD))
@@ -751,6 +754,13 @@ def cohesive_finding(el, coh, dist):
 
 
 # ============================================================================== write
+def provenance():
+    """The provenance sentence: the start recorded in WORK, the runs made there."""
+    runs = sum(1 for d in os.listdir(WORK) if os.path.isfile(os.path.join(WORK, d, "status")))
+    return study_provenance.sentence(study_provenance.load(os.path.join(WORK, "provenance.json")),
+                                     runs)
+
+
 def main():
     os.makedirs(SVG_DIR, exist_ok=True)
     body = OUT
@@ -759,6 +769,8 @@ def main():
     section_5_2_2()
     head = [
         "# The paper's numerical examples",
+        "",
+        provenance(),
         "",
         "Pituba & Souza Neto (2015), sections 5.1 and 5.2, reproduced with mesorve. Generated "
         "by `scripts/paper-examples` (do not edit by hand); every verdict below is asserted "
