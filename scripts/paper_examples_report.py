@@ -2,7 +2,8 @@
 
 Usage: python3 scripts/paper_examples_report.py WORK OUT.md SVG_DIR
 
-WORK holds one directory per run (response.csv of `rve run`, status: "ok" or the error).
+WORK holds one directory per run (response.csv of `rve run`, status: "ok" or the error)
+and provenance.json, the study's start as scripts/study_provenance.py records it.
 Standard library only; the plots are plain SVG. The verdicts use the same measures and
 thresholds as tests/paper_examples.rs, which asserts them.
 """
@@ -11,6 +12,8 @@ import csv
 import math
 import os
 import sys
+
+import study_provenance
 
 WORK, MD, SVG_DIR = sys.argv[1:4]
 SVG_REL = os.path.relpath(SVG_DIR, os.path.dirname(MD))
@@ -219,6 +222,13 @@ def section_5_1():
     )
     d11 = 30000 * 0.8 / (1.2 * 0.6)
     d12, g = 30000 * 0.2 / (1.2 * 0.6), 30000 / 2.4
+    fig7(d11)
+    fig6(d11, d12, g)
+    fig8(d11)
+
+
+def fig7(d11):
+    """Fig. 7: the three cohesive strengths."""
     w("### Fig. 7: sigma_c = 4, 40, 0.4 (load case 1, eps = [8e-5, 0, 0] in 20 increments)", "")
     rows, ratios = [], {}
     for sc in ("4.0", "40.0", "0.4"):
@@ -253,6 +263,9 @@ def section_5_1():
         "yes" if ok else "no",
     )
 
+
+def fig6(d11, d12, g):
+    """Fig. 6: the three load cases."""
     w("### Fig. 6: load cases 1-3 (sigma_c = 4)", "")
     w(
         "Damage measure: the secant along the path, `s . eps / (eps . D_el . eps)` at the "
@@ -287,6 +300,9 @@ def section_5_1():
         "partly" if sec[2] < 0.5 * min(sec[:2]) and sec[1] > sec[0] else "check",
     )
 
+
+def fig8(d11):
+    """Fig. 8: the cycle of the single interface."""
     w("### Fig. 8: the cycle to [8e-5, -8e-5, 5e-4], then to [-4e-5, -4e-5, -2.5e-4]", "")
     r = run("si_cycle")
     rows = [[k, e(r[k]["eps_xx"]), e(r[k]["gamma_xy"]), f4(r[k]["sig_xx"]), f4(r[k]["sig_xy"]),
@@ -329,7 +345,15 @@ def section_5_2_1():
     x, y = run("x"), run("y")
     px, ex = limit_point("lp_x", "sig_xx")
     py_, ey = limit_point("lp_y", "sig_yy")
+    fig10(el, x, px, ex, py_)
+    newton_iterations(x)
+    fig11(el, x, y, px, ex, py_, ey)
+    fig13(el, x, px, ex)
+    fig15(el, px, ex)
 
+
+def fig10(el, x, px, ex, py_):
+    """Fig. 10: the 20-increment path along x and the limit point."""
     w("### Fig. 10: eps = [2.2e-4, 0, 0] in 20 increments", "")
     rows = [[k, e(x[k]["eps_xx"]), f4(x[k]["sig_xx"]), f4(x[k]["sig_yy"]), f0(x[k]["D11"]),
              f0(x[k]["iterations"]), f0(x[k]["substeps"]),
@@ -379,6 +403,9 @@ def section_5_2_1():
         "",
     )
 
+
+def newton_iterations(x):
+    """Newton iterations of the paths, snap-backs apart."""
     w("### Newton iterations", "")
     # Every increment of the section 5.2.1 (Fig. 10) and 5.2.2 (cycle) paths but the ones
     # in which path following traced a snap-back (limit points of the strain).
@@ -417,6 +444,9 @@ def section_5_2_1():
         "yes, but for the snap-back increment" if most <= 4 else "no",
     )
 
+
+def fig11(el, x, y, px, ex, py_, ey):
+    """Fig. 11: anisotropy, x against y."""
     w("### Fig. 11: anisotropy, eps = [2.2e-4, 0, 0] vs [0, 2.2e-4, 0]", "")
     rows = [[k, e(x[k]["eps_xx"]), f4(x[k]["sig_xx"]), f4(y[k]["sig_yy"]),
              pct(rel(y[k]["sig_yy"], x[k]["sig_xx"])), f0(x[k]["D11"]), f0(y[k]["D22"])]
@@ -448,6 +478,9 @@ def section_5_2_1():
         "yes" if atp > 0.01 and atp > 10 * max(half, rel(el["D22"], el["D11"])) else "no",
     )
 
+
+def fig13(el, x, px, ex):
+    """Fig. 13: mesh objectivity, coarse against fine."""
     w("### Fig. 13: mesh objectivity, 532 vs 8176 triangles (96 vs 362 ITZ elements)", "")
     w(
         "The paper's fine mesh has 8088 triangles and 364 ITZ elements and uses linear BC; "
@@ -492,6 +525,9 @@ def section_5_2_1():
         else "check: the measures changed",
     )
 
+
+def fig15(el, px, ex):
+    """Figs. 14-15: circles against ellipses."""
     w("### Figs. 14-15: elliptic aggregates, eps = [3e-4, 0, 0] in 20 increments", "")
     w(
         "Two elliptic RVEs: `scenes/paper/rve_ellipses_same_centres.toml`, the paper's "
@@ -601,7 +637,30 @@ def section_5_2_2():
         f"by {pct(rel(pl[0], pp[0]))}.",
         "yes" if all(g > 0 for g in gap) and elastic > 0 else "no",
     )
+    fig17(el)
 
+
+PENALTIES = ["1e4", "1e5", "1e6", "1e7", "1e8", "1e9"]
+
+
+def distances(runs):
+    """Largest |s_xx - s_xx(1e9)| over the cycle over the largest |s_xx(1e9)|, per penalty;
+    None unless every run completes."""
+    lps = PENALTIES
+    if not all(r.ok for r in runs.values()):
+        return None
+    ref = runs["1e9"]
+    scale = max(abs(v) for v in ref.col("sig_xx"))
+    return {lp: max(abs(a - b) for a, b in zip(runs[lp].col("sig_xx"), ref.col("sig_xx"))) / scale
+            for lp in lps}
+
+
+def converged(d):
+    return d is not None and d["1e7"] < 0.01 and d["1e8"] < 1e-3 and d["1e4"] > 0.2
+
+
+def fig17(el):
+    """Fig. 17: the penalty sweep on the cycle, both contact-shear laws."""
     w("### Fig. 17: penalty factor lambda_p = 1e4 ... 1e9 N/mm on the cycle", "")
     w(
         "With the paper's contact law (`contact_shear = \"penalty\"`, the default: penalty on "
@@ -610,18 +669,9 @@ def section_5_2_2():
         "|s_xx - s_xx(1e9)| over the cycle over the largest |s_xx(1e9)|, with the same law.",
         "",
     )
-    lps = ["1e4", "1e5", "1e6", "1e7", "1e8", "1e9"]
+    lps = PENALTIES
     coh = {lp: run(f"pen_cohesive_{lp}") for lp in lps}
     pap = {lp: run(f"pen_paper_{lp}") for lp in lps}
-
-    def distances(runs):
-        if not all(r.ok for r in runs.values()):
-            return None
-        ref = runs["1e9"]
-        scale = max(abs(v) for v in ref.col("sig_xx"))
-        return {lp: max(abs(a - b) for a, b in zip(runs[lp].col("sig_xx"), ref.col("sig_xx"))) / scale
-                for lp in lps}
-
     dist, dist_p = distances(coh), distances(pap)
     rows = []
     for lp in lps:
@@ -641,10 +691,13 @@ def section_5_2_2():
         "s_xx (N/mm²)",
         [curve(f"lambda_p = {lp}", pap[lp], "eps_xx", "sig_xx", lp in ("1e8", "1e9")) for lp in lps if pap[lp].ok],
     )
+    paper_law_finding(el, pap, dist_p)
+    cohesive_finding(el, coh, dist)
 
-    def converged(d):
-        return d is not None and d["1e7"] < 0.01 and d["1e8"] < 1e-3 and d["1e4"] > 0.2
 
+def paper_law_finding(el, pap, dist_p):
+    """The finding of Fig. 17 with the paper's contact law."""
+    lps = PENALTIES
     # The paper's law: where the largest difference to 1e9 sits, and the difference at the
     # end of the compression branch (increment 60).
     if dist_p:
@@ -681,6 +734,11 @@ def section_5_2_2():
          f"({failing[0]}: {pap[failing[0]].failure()})."),
         "yes" if dist_p and paper_ok else f"no (not computable from {failing[0]} up)" if failing else "no",
     )
+
+
+def cohesive_finding(el, coh, dist):
+    """The finding of Fig. 17 with contact_shear = "cohesive"."""
+    lps = PENALTIES
     conv = converged(dist) and all(dist[lps[k + 1]] < dist[lps[k]] / 3 for k in range(4))
     finding(
         "5.2.2, Fig. 17 (contact_shear = \"cohesive\")",
@@ -696,6 +754,13 @@ def section_5_2_2():
 
 
 # ============================================================================== write
+def provenance():
+    """The provenance sentence: the start recorded in WORK, the runs made there."""
+    runs = sum(1 for d in os.listdir(WORK) if os.path.isfile(os.path.join(WORK, d, "status")))
+    return study_provenance.sentence(study_provenance.load(os.path.join(WORK, "provenance.json")),
+                                     runs)
+
+
 def main():
     os.makedirs(SVG_DIR, exist_ok=True)
     body = OUT
@@ -704,6 +769,8 @@ def main():
     section_5_2_2()
     head = [
         "# The paper's numerical examples",
+        "",
+        provenance(),
         "",
         "Pituba & Souza Neto (2015), sections 5.1 and 5.2, reproduced with mesorve. Generated "
         "by `scripts/paper-examples` (do not edit by hand); every verdict below is asserted "
