@@ -54,6 +54,17 @@
       sets BANDLOW and BANDTOP) and of the two sound rows there. Exit status 1 unless the
       force falls after its peak by at least DROP while U grows, the band stretches and
       the sound rows contract (unload).
+
+  calculix_report.py snap REFERENCE.csv LABEL=JOB:EXPECT ...
+      specimen_snap.inp's runs (one element pulled in one step through the RVE's
+      snap-back) against `rve run` of the same path in 100 increments (REFERENCE.csv, its
+      force 10 sig_xx): the force at the end, increments, cut-backs, whether the UMAT
+      printed its step-check line, the smallest PNEWDT returned to ccx (JOB.calls of
+      calculix_examples/umat_pnewdt.c), as Markdown. EXPECT: `+`-separated checks of
+      the run: `flagged` (the step-check line is in JOB.log), `stopped` (ccx stopped the
+      DIRECT step: "solution seems to diverge"), `cut` (an attempt was cut back), `close`
+      (it finished within SNAP_TOLERANCE of the reference), `-` none. Exit status 1 when a
+      check fails, with the reasons.
 """
 import re
 import sys
@@ -68,6 +79,12 @@ DROP = 0.01
 # ccx's convergence criterion tolerates (0.5 % of the average force): an unloading that
 # does not end at the origin fails.
 ZERO_FORCE = 1e-9
+# The RVE's lower branch after the snap-back, on the path of specimen_snap.inp: `rve run` in
+# 16 to 400 increments ends at 3.2043 to 3.2138 N/mm^2 (0.30 % apart: which ITZ points crack
+# depends a little on the path), ccx in STATEV mode 0.04 % from `rve run`; the upper branch
+# that a too large increment lands on is 32-33 % above. 1 % is three times the first
+# spread and a thirtieth of the jump: a run within it has taken the snap.
+SNAP_TOLERANCE = 0.01
 
 
 def dat_blocks(path, kind, nset=None):
@@ -395,6 +412,60 @@ def iterations(step, runs):
               "residuals (%) " + ", ".join(f"{v:.1e}" for v in seq))
 
 
+def snap_run(job):
+    """The figures of one specimen_snap.inp run (see `snap`)."""
+    with open(job + ".log") as f:
+        log = f.read()
+    forces = dat_blocks(job + ".dat", "force", "RIGHT")
+    with open(job + ".calls") as f:
+        returned = [float(l.split()[9]) for l in f]
+    rows = sta(job)
+    end = max(forces) if forces else 0.0
+    return {"finished": "Job finished" in log,
+            "stopped": "solution seems to diverge" in log,
+            "flagged": "depends on the size of this increment" in log,
+            "increments": sum(r[3] for r in rows), "cut": sum(not r[3] for r in rows),
+            "time": end, "force": forces[end][0][0] if forces else float("nan"),
+            "pnewdt": min((v for v in returned if v > 0), default=None)}
+
+
+def snap_failures(label, r, reference):
+    """The failed checks of a run (`snap`)."""
+    gap = r["force"] / reference - 1
+    checks = {"flagged": (r["flagged"], "the UMAT printed no step-check line"),
+              "stopped": (r["stopped"], "ccx did not stop the DIRECT step"),
+              "cut": (r["cut"] > 0, "ccx cut no increment"),
+              "close": (r["finished"] and abs(gap) <= SNAP_TOLERANCE,
+                        f"finished {r['finished']}, force {gap:+.2%} of the reference "
+                        f"(tolerance {SNAP_TOLERANCE:.0%}); smallest PNEWDT returned to ccx: "
+                        f"{r['pnewdt'] or 'none (ccx hands -1 and got it back)'}")}
+    return [f"{label}: {checks[e][1]}" for e in r["expect"] if not checks[e][0]]
+
+
+def snap(reference_csv, runs):
+    with open(reference_csv) as f:
+        header = f.readline().strip().split(",")
+        last = [l for l in f if l.strip()][-1].split(",")
+    reference = 10 * float(last[header.index("sig_xx")])
+    print(f"Reference: `rve run`, 100 increments: {reference:.4f} N.\n")
+    print("| run | finished | increments | cut back | end time | force (N) | "
+          "against reference | step-check line | smallest PNEWDT to ccx |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    failures = []
+    for arg in runs:
+        label, rest = arg.split("=", 1)
+        job, expect = rest.rsplit(":", 1)
+        r = snap_run(job)
+        r["expect"] = [] if expect == "-" else expect.split("+")
+        status = "yes" if r["finished"] else ("stopped" if r["stopped"] else "no")
+        print(f"| {label} | {status} | {r['increments']} | {r['cut']} | {r['time']:.4f} | "
+              f"{r['force']:.4f} | {r['force'] / reference - 1:+.2%} | "
+              f"{'yes' if r['flagged'] else 'no'} | {r['pnewdt'] or '-1 (none)'} |")
+        failures += snap_failures(label, r, reference)
+    if failures:
+        sys.exit("\n".join(f"calculix_report.py snap: {m}" for m in failures))
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "homogeneous":
         homogeneous(sys.argv[2], sys.argv[3])
@@ -415,5 +486,7 @@ if __name__ == "__main__":
          "factorizations": factorizations}[sys.argv[1]](runs)
     elif sys.argv[1] == "band":
         band(sys.argv[2])
+    elif sys.argv[1] == "snap":
+        snap(sys.argv[2], sys.argv[3:])
     else:
         sys.exit(__doc__)
