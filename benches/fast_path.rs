@@ -57,8 +57,8 @@ fn main() {
     off.spec.solver.fast_path = false;
     let full_model = Arc::new(Model::from_scene(&off).unwrap());
     let sizes = StateSizes {
-        unknowns: fast_model.disc.n(),
-        history: fast_model.disc.history_len(),
+        unknowns: fast_model.discretization().n(),
+        history: fast_model.discretization().history_len(),
     };
     let targets = rve::scene::path_points(&scene.spec.path);
     let mut ws = fast_model.workspace();

@@ -209,7 +209,7 @@ fn main() {
 /// The model's sizes, what the per-component figures follow from.
 fn sizes() {
     let model = Model::from_scene(&Scene::from_file(SCENE).unwrap()).unwrap();
-    let d = &model.disc;
+    let d = model.discretization();
     println!("| scenes/paper_rve.toml | value |");
     println!("|---|---|");
     println!("| unknowns (f64) | {} |", d.n());

@@ -61,9 +61,9 @@ fn bench(path: &str) -> Row {
     let model = Arc::new(Model::from_scene(&scene).expect("model"));
     let mut ws = model.workspace();
     // Buffers of the timed factorizations and solves, beside the workspace's own.
-    let mut numeric = model.linear.numeric();
-    let mut stack = faer::dyn_stack::MemBuffer::new(model.linear.scratch(4));
-    let mut rhs4 = vec![0.0; 4 * model.disc.n()];
+    let mut numeric = model.linear_solver().numeric();
+    let mut stack = faer::dyn_stack::MemBuffer::new(model.linear_solver().scratch(4));
+    let mut rhs4 = vec![0.0; 4 * model.discretization().n()];
     let steps = 20;
     let mut times = Vec::new();
     let mut iterations = Vec::new();
@@ -80,7 +80,11 @@ fn bench(path: &str) -> Row {
     let mut lblt_count = 0usize;
     // Repeat the path to get stable medians (more often for the small RVE, whose
     // increments are short enough for machine noise to matter).
-    let repeats = if model.disc.n() < 2000 { 15 } else { 3 };
+    let repeats = if model.discretization().n() < 2000 {
+        15
+    } else {
+        3
+    };
     for _ in 0..repeats {
         let mut inst = Instance::new(model.clone());
         for k in 1..=steps {
@@ -101,9 +105,9 @@ fn bench(path: &str) -> Row {
             for _ in 0..5 {
                 let t = Instant::now();
                 let kind = model
-                    .linear
+                    .linear_solver()
                     .factorize(
-                        &model.disc.pattern.symbolic,
+                        &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
                         true,
@@ -117,13 +121,13 @@ fn bench(path: &str) -> Row {
                     FactorKind::Lblt => lblt_count += 1,
                     FactorKind::Lu => {}
                 }
-                let n = model.disc.n();
+                let n = model.discretization().n();
                 for (times, width) in st.iter_mut().zip(SOLVE_WIDTHS) {
                     let rhs = &mut rhs4[..width * n];
                     rhs[..n].copy_from_slice(ws.residual());
-                    rhs[n..].copy_from_slice(&model.disc.g[..(width - 1) * n]);
+                    rhs[n..].copy_from_slice(&model.discretization().g[..(width - 1) * n]);
                     let t = Instant::now();
-                    model.linear.solve_in_place(
+                    model.linear_solver().solve_in_place(
                         &mut numeric,
                         rhs,
                         width,
@@ -133,9 +137,9 @@ fn bench(path: &str) -> Row {
                 }
                 let t = Instant::now();
                 model
-                    .linear
+                    .linear_solver()
                     .factorize(
-                        &model.disc.pattern.symbolic,
+                        &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
                         false,
@@ -176,8 +180,8 @@ fn bench(path: &str) -> Row {
     }
     Row {
         name: path.rsplit('/').next().unwrap_or(path).to_string(),
-        unknowns: model.disc.n(),
-        itz: model.disc.interfaces.len(),
+        unknowns: model.discretization().n(),
+        itz: model.discretization().interfaces.len(),
         mean_increment_ms: 1e3 * times.iter().sum::<f64>() / times.len() as f64,
         increment_ms: 1e3 * median(&mut times),
         iterations: median(&mut iterations),

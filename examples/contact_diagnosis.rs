@@ -34,7 +34,7 @@ use rve::{Model, Scene, TangentRequest};
 
 /// Jumps `[delta_s, delta_n]` of every interface point at `x`.
 fn jumps(model: &Model, x: &[f64]) -> Vec<[f64; 2]> {
-    let disc = &model.disc;
+    let disc = &model.discretization();
     let q = disc.quadrature;
     let np = q.num_points();
     let mut out = Vec::new();
@@ -75,8 +75,8 @@ fn cohesive_law(scene: &Scene) -> CohesiveLaw {
 }
 
 fn status_of(model: &Model, x: &[f64]) -> Vec<bool> {
-    let mut s = vec![false; model.disc.interface_points()];
-    model.disc.contact_status(x, &mut s);
+    let mut s = vec![false; model.discretization().interface_points()];
+    model.discretization().contact_status(x, &mut s);
     s
 }
 
@@ -129,8 +129,8 @@ fn main() {
     }
     println!(
         "scene {scene_path}: {} unknowns, {} ITZ points; path {}",
-        model.disc.n(),
-        model.disc.history_len(),
+        model.discretization().n(),
+        model.discretization().history_len(),
         match direction {
             Some((dir, step)) => format!("t {dir:?}, increments of t = {step:e}"),
             None => "of the scene".to_string(),
@@ -280,10 +280,10 @@ fn main() {
     );
 
     // 4. The cycling points under each status.
-    let np = model.disc.points_per_interface();
+    let np = model.discretization().points_per_interface();
     for &i in &flipping {
         let e = i / np;
-        let length = model.disc.interfaces[e].length;
+        let length = model.discretization().interfaces[e].length;
         let hist = CohesiveHistory {
             delta_max: committed.history[i],
         };

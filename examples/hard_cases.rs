@@ -32,7 +32,7 @@ fn norm(v: &[f64]) -> f64 {
 /// there: loading points sit on their `delta_max`): the relative residual of the literal
 /// law.
 fn literal_residual(model: &Model, x: &[f64], eps: &[f64; 3], base: &[f64]) -> f64 {
-    let disc = &model.disc;
+    let disc = &model.discretization();
     let n = disc.n();
     let mut r = vec![0.0; n];
     let mut trial = base.to_vec();
@@ -101,7 +101,9 @@ fn main() {
                     let lit = literal_residual(&model, &trial.unknowns, &eps, &trial.history);
                     if let Some(held) = ws.held_contact_status().map(|s| s.to_vec()) {
                         let mut read = vec![false; held.len()];
-                        model.disc.contact_status(&trial.unknowns, &mut read);
+                        model
+                            .discretization()
+                            .contact_status(&trial.unknowns, &mut read);
                         let off: Vec<usize> =
                             (0..read.len()).filter(|&i| read[i] != held[i]).collect();
                         if !off.is_empty() {
@@ -119,7 +121,11 @@ fn main() {
                                 &mut ws,
                             ) {
                                 Some(sol) => {
-                                    let (other, _) = model.hom.stress(&model.disc, &eps, &sol.x);
+                                    let (other, _) = model.homogenizer().stress(
+                                        model.discretization(),
+                                        &eps,
+                                        &sol.x,
+                                    );
                                     let scale = r.stress.iter().fold(0.4f64, |m, v| m.max(v.abs()));
                                     let d = (0..3)
                                         .map(|i| (other[i] - r.stress[i]).abs())
@@ -130,7 +136,7 @@ fn main() {
                                         println!("  seed {seed} increment {}: {} points held against their gap, bracket {d:.2e}, literal residual {lit:.1e}", k + 1, off.len());
                                     }
                                     let mut again = vec![false; read.len()];
-                                    model.disc.contact_status(&sol.x, &mut again);
+                                    model.discretization().contact_status(&sol.x, &mut again);
                                     if again == flipped {
                                         missed += 1;
                                     }

@@ -4,11 +4,54 @@
 //! effect in brittle materials by a mesoscopic scale approach"; equation numbers in the
 //! doc comments refer to that paper.
 //!
-//! The safe API is [`Model`] (one per scene, shared) and [`Instance`] (one per material
-//! point: the trial/commit lifecycle and checkpoint bytes, see [`state::persist`]); the C
-//! interface in [`ffi`] is a thin translation over it. The command-line tool (`src/cli/`)
-//! is a module of the `rve` binary, not of this library, so `librve.so` does not link
-//! clap.
+//! # The Rust API
+//!
+//! - [`Scene`]: what to build (a TOML file, [`Scene::embedded_default`], or a text).
+//! - [`Model`]: one per scene, immutable, shared by all the points of that material
+//!   (`Arc<Model>`): mesh, sparsity pattern, symbolic factorizations, elastic tangent.
+//! - [`Instance`]: one per material point, small: the committed state, the trial/commit
+//!   lifecycle ([`Instance::update`], [`Instance::update_timed`], [`Instance::commit`],
+//!   [`Instance::revert`]) and checkpoint bytes ([`persist`]).
+//! - [`Workspace`]: one per thread, reused by every update on that thread, so the update
+//!   allocates nothing.
+//! - [`Response`]: the homogenized stress `[s_xx, s_yy, s_xy]`, the consistent tangent
+//!   (row-major, engineering shear strain) and an [`IncrementReport`].
+//! - Errors are [`Error`], typed, each carrying its context.
+//!
+//! The modules [`ffi`] (the C interface, a thin translation over this API), [`host`] (the
+//! UMAT's translation of host tensor layouts and `STATEV`), [`io`] (VTK and SVG output),
+//! [`scene`] (the schema) and [`model`] are public too. The numerical core (mesh,
+//! elements, interface laws, constraints, assembly, solver, homogenization, state) is
+//! crate-private; the `internals` feature opens it to the verification tests and
+//! benches, without any compatibility promise.
+//!
+//! ```
+//! use std::sync::Arc;
+//! use rve::{Instance, Model, Scene, TangentRequest};
+//!
+//! let scene = Scene::embedded_default()?; // the paper's RVE (section 5.2)
+//! let model = Arc::new(Model::from_scene(&scene)?); // meshed once, shared by points
+//! let mut workspace = model.workspace(); // one per thread
+//! let mut point = Instance::new(model.clone()); // one per integration point
+//! let mut last = 0.0;
+//! for k in 1..=5 {
+//!     let strain = [2e-5 * k as f64, 0.0, 0.0]; // [eps_xx, eps_yy, gamma_xy]
+//!     let response = point.update(strain, &mut workspace, TangentRequest::Consistent)?;
+//!     point.commit()?; // the host's increment converged
+//!     assert!(response.stress[0] > last); // elastic range: the stress grows
+//!     last = response.stress[0];
+//! }
+//! // The ITZ softens from the first opening (eq. 23): below the virgin RVE's response.
+//! let d11 = model.elastic_tangent()[0];
+//! assert!(last < d11 * 1e-4 && last > 0.5 * d11 * 1e-4);
+//! # Ok::<(), rve::Error>(())
+//! ```
+//!
+//! # Structure
+//!
+//! The C interface in [`ffi`] is a thin translation over this API. The command-line tool
+//! (`src/cli/`) is a module of the `rve` binary, not of this library, so `librve.so`
+//! does not link clap.
 //!
 //! Dependencies flow one way (`tests/layers.rs` fails on an import against this order):
 //!
@@ -24,30 +67,48 @@
 
 #![deny(unsafe_code)]
 
-pub(crate) mod assembly;
-pub mod constraint;
-pub mod element;
+/// Declares a module of the numerical core: crate-private in the library users link,
+/// public (and hidden from the docs) with the `internals` feature, which only the
+/// verification tests and benches turn on (the crate's dev-dependency on itself in
+/// `Cargo.toml`). Its items carry no compatibility promise.
+macro_rules! internal_modules {
+    ($($name:ident),* $(,)?) => {$(
+        #[cfg(feature = "internals")]
+        #[doc(hidden)]
+        pub mod $name;
+        #[cfg(not(feature = "internals"))]
+        pub(crate) mod $name;
+    )*};
+}
+
+internal_modules!(
+    assembly,
+    constraint,
+    element,
+    geometry,
+    homogenization,
+    interface,
+    material,
+    mesh,
+    solver,
+    state,
+);
+
 pub mod error;
 #[allow(unsafe_code)]
 pub mod ffi;
-pub mod geometry;
-pub(crate) mod homogenization;
 pub mod host;
-pub mod interface;
 pub mod io;
-pub mod material;
-pub mod mesh;
 pub mod model;
 pub mod scene;
-pub mod solver;
-pub mod state;
 
 pub use error::{Error, Result};
+pub use material::Analysis;
+pub use mesh::MeshStats;
 pub use model::{Instance, Model, Response};
 pub use scene::{Scene, MAX_STRAIN};
-pub use solver::TangentRequest;
-pub use solver::Workspace;
-pub use state::{State, STATE_FORMAT_VERSION};
+pub use solver::{Answer, FactorKind, IncrementReport, Integration, TangentRequest, Workspace};
+pub use state::{persist, Quantized, State, StateSizes, STATE_FORMAT_VERSION};
 
 /// The crate version, `major.minor.patch`, as in Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

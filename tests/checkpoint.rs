@@ -115,7 +115,7 @@ fn a_refused_load_changes_nothing() {
     assert!(e.to_string().contains("(another scene)"), "{e}");
     // A contact status held at a point the model does not have (a spare bit of the
     // bitset's last word, past the interface points).
-    let points = model.disc.interface_points();
+    let points = model.discretization().interface_points();
     let nh = u64::from_le_bytes(bytes[24..32].try_into().unwrap()) as usize;
     assert!(
         points % 64 != 0,

@@ -468,7 +468,7 @@ fn compare(setup: &Setup, strains: &[[f64; 3]], name: &str) -> Errors {
     // Scale of the stress errors: the larger of sigma_c and |D eps| over the path.
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
-    let points = model.disc.points_per_interface();
+    let points = model.discretization().points_per_interface();
     let mut errors = Errors::default();
     for (k, &eps) in strains.iter().enumerate() {
         let r = instance
@@ -493,7 +493,7 @@ fn compare(setup: &Setup, strains: &[[f64; 3]], name: &str) -> Errors {
         let current = model.current_state(instance.committed()).unwrap();
         let x = &current.unknowns;
         let val = |d: u32| if d == FIXED { 0.0 } else { x[d as usize] };
-        for dofs in &model.disc.interface_dofs {
+        for dofs in &model.discretization().interface_dofs {
             for node in 0..2 {
                 let dx = val(dofs[4 + 2 * node]) - val(dofs[2 * node]);
                 let dy = val(dofs[5 + 2 * node]) - val(dofs[1 + 2 * node]);
@@ -729,7 +729,7 @@ fn straight_interface_mesh_pairs_copies_by_side() {
         }
     }
     // Periodic map: each top copy is slaved to the bottom copy of the same side.
-    let dofs = &model.disc.dofs;
+    let dofs = &model.discretization().dofs;
     for k in 0..2 {
         assert_eq!(dofs.reduced[2 * top[k]], dofs.reduced[2 * bottom[k]]);
         assert_ne!(dofs.reduced[2 * top[k]], dofs.reduced[2 * bottom[1 - k]]);
@@ -758,8 +758,8 @@ fn minimal_bc_rows_integrate_a_field_with_a_jump_exactly() {
             on_left[n] = Some(t.phase == rve::mesh::Phase::Inclusion);
         }
     }
-    let dofs = &model.disc.dofs;
-    let mut x = vec![0.0; model.disc.n()];
+    let dofs = &model.discretization().dofs;
+    let mut x = vec![0.0; model.discretization().n()];
     for (n, p) in mesh.nodes.iter().enumerate() {
         let u = if on_left[n].unwrap() {
             left(p[0], p[1])

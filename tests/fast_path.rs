@@ -50,15 +50,15 @@ fn trial_state(inst: &Instance, eps: [f64; 3]) -> rve::State {
 /// paper states it) and the history `history`.
 fn residual_with_gaps(model: &Model, x: &[f64], eps: &[f64; 3], history: &[f64]) -> f64 {
     let problem = rve::solver::Problem {
-        disc: &model.disc,
-        linear: &model.linear,
-        settings: &model.solver,
-        predictor: &model.elastic_sensitivity,
+        disc: model.discretization(),
+        linear: model.linear_solver(),
+        settings: model.settings(),
+        predictor: model.elastic_sensitivity(),
     };
     let mut trial = history.to_vec();
     let mut r = vec![0.0; x.len()];
     let counts = model
-        .disc
+        .discretization()
         .evaluate(x, eps, history, &mut trial, &mut r, None);
     assert_eq!(counts.loading, 0, "a loading point at the fast answer");
     assert_eq!(trial, history, "the history moved at the fast answer");

@@ -126,7 +126,7 @@ fn matches_the_safe_api_and_info_and_requests() {
         )
     };
     assert_eq!(st, OK);
-    assert_eq!(tangent, model.elastic_tangent);
+    assert_eq!(tangent, model.elastic_tangent());
     // Unknown request.
     let st = unsafe { rve_update(h, e.as_ptr(), s_only.as_mut_ptr(), tangent.as_mut_ptr(), 7) };
     assert_eq!(st, RveStatus::InvalidArgument as u32);

@@ -41,7 +41,7 @@ fn a_model_or_update_never_hands_out_a_non_finite_tangent() {
             );
             panic!(
                 "model accepted, elastic tangent {:?}, update {r:?}",
-                model.elastic_tangent
+                model.elastic_tangent()
             );
         }
     }

@@ -71,11 +71,11 @@ fn straight_linear_interface_matches_the_series_layer() {
     ] {
         let model = Arc::new(Model::from_scene(&scene(name)).unwrap());
         assert!(
-            !model.disc.interfaces.is_empty(),
+            !model.discretization().interfaces.is_empty(),
             "{name}: the line has ITZ elements"
         );
         assert_eq!(
-            model.disc.history_len(),
+            model.discretization().history_len(),
             0,
             "{name}: the law keeps no history"
         );

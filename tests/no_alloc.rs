@@ -94,7 +94,7 @@ fn checked_indefinite_factorizations_do_not_allocate() {
     let mut inst = Instance::new(model.clone());
     inst.update([1e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
         .unwrap();
-    let pattern = &model.disc.pattern;
+    let pattern = &model.discretization().pattern;
     let mean_diagonal = pattern
         .diagonal_slots
         .iter()
@@ -115,9 +115,9 @@ fn checked_indefinite_factorizations_do_not_allocate() {
         let run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
             let factorization = ws.factorization();
             let kind = factorization
-                .factorize(&model.linear, &pattern.symbolic, &values, false)
+                .factorize(model.linear_solver(), &pattern.symbolic, &values, false)
                 .unwrap();
-            factorization.solve(&model.linear, rhs, 1);
+            factorization.solve(model.linear_solver(), rhs, 1);
             kind
         };
         assert_eq!(run(&mut ws, &mut rhs), expected);

@@ -226,8 +226,8 @@ fn fd_tangent(
 fn set_up(model: &Arc<Model>, state: InterfaceState, what: &str) -> (Instance, [f64; 3], Response) {
     let mut inst = Instance::new(model.clone());
     let mut ws = model.workspace();
-    let taylor = model.disc.n() == 0;
-    let points = model.disc.history_len();
+    let taylor = model.discretization().n() == 0;
+    let points = model.discretization().history_len();
     if state != InterfaceState::Virgin {
         for level in DAMAGE_PATH {
             inst.update(scaled(DIR, level), &mut ws, TangentRequest::None)
@@ -342,7 +342,7 @@ fn tangent_matches_central_difference_of_stress() {
     for analysis in ANALYSES {
         for bc in BCS {
             let model = two_circles(bc, analysis, &[]);
-            assert_eq!(model.disc.history_len(), 72);
+            assert_eq!(model.discretization().history_len(), 72);
             let mut ws = model.workspace();
             for state in STATES {
                 let what = format!("{bc} {analysis} {state:?}");
@@ -372,7 +372,7 @@ fn tangent_matches_central_difference_of_stress() {
 fn system_tangent_is_symmetric_and_products_agree() {
     for bc in ["linear", "periodic", "minimal"] {
         let model = two_circles(bc, "plane_strain", &[]);
-        let pattern = &model.disc.pattern;
+        let pattern = &model.discretization().pattern;
         let (cp, ri) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
         let n = pattern.n;
         for state in STATES {
@@ -432,7 +432,7 @@ fn tangent_matches_central_difference_with_lobatto2() {
     );
     for bc in ["periodic", "minimal"] {
         let model = two_circles(bc, "plane_stress", &[lobatto]);
-        assert_eq!(model.disc.history_len(), 48);
+        assert_eq!(model.discretization().history_len(), 48);
         let mut ws = model.workspace();
         for state in STATES {
             let what = format!("lobatto2 {bc} {state:?}");
@@ -530,9 +530,9 @@ fn homogeneous_rve_returns_the_material() {
             let model = homogeneous(bc, analysis);
             let what = format!("homogeneous {bc} {analysis}");
             assert!(
-                rel_diff(&model.elastic_tangent, &d_row) < 1e-12,
+                rel_diff(&model.elastic_tangent(), &d_row) < 1e-12,
                 "{what}: elastic tangent {:?} vs D {d_row:?}",
-                model.elastic_tangent
+                model.elastic_tangent()
             );
             let mut inst = Instance::new(model.clone());
             let mut ws = model.workspace();
@@ -585,8 +585,8 @@ fn same_material_inclusions_with_intact_or_bonded_itz() {
                     ("contact = true", "contact = false"),
                 ],
             );
-            assert!(bonded.disc.interfaces.is_empty());
-            let e_bonded = rel_diff(&bonded.elastic_tangent, &d_row);
+            assert!(bonded.discretization().interfaces.is_empty());
+            let e_bonded = rel_diff(&bonded.elastic_tangent(), &d_row);
             let mut line = format!("{analysis:12} {bc:8} bonded {e_bonded:.1e}  ITZ sigma_c:");
             assert!(e_bonded < 1e-10, "{bc} {analysis} bonded: {e_bonded:.2e}");
 
@@ -597,8 +597,8 @@ fn same_material_inclusions_with_intact_or_bonded_itz() {
                     analysis,
                     &[same, ("sigma_c = 4.0", &format!("sigma_c = {sigma_c}"))],
                 );
-                let e = rel_diff(&model.elastic_tangent, &d_row);
-                let softening = d - mat(&model.elastic_tangent);
+                let e = rel_diff(&model.elastic_tangent(), &d_row);
+                let softening = d - mat(&model.elastic_tangent());
                 let min_eig = min_sym_eigenvalue(&softening) / d.norm();
                 line += &format!(" {sigma_c}: {e:.1e} (min eig(D-D_hom)/|D| {min_eig:.0e})");
                 assert!(
@@ -751,7 +751,8 @@ fn bc_ordering_and_bounds_on_the_paper_rve() {
     ] {
         let models: Vec<Arc<Model>> = BCS.iter().map(|bc| paper_rve(bc, more)).collect();
         let (voigt, reuss) = voigt_reuss(&models[0]);
-        let tangents: [Matrix3<f64>; 4] = std::array::from_fn(|k| mat(&models[k].elastic_tangent));
+        let tangents: [Matrix3<f64>; 4] =
+            std::array::from_fn(|k| mat(&models[k].elastic_tangent()));
         let taylor_vs_voigt = (tangents[0] - voigt).norm() / voigt.norm();
         assert!(
             taylor_vs_voigt < 1e-12,
@@ -791,7 +792,7 @@ fn bc_ordering_and_bounds_on_the_paper_rve() {
     );
     let tangents: [Matrix3<f64>; 4] = std::array::from_fn(|k| {
         let model = paper_rve(BCS[k], &[]);
-        assert_eq!(model.disc.history_len(), history.len());
+        assert_eq!(model.discretization().history_len(), history.len());
         let committed = State {
             history: history.clone(),
             ..model.new_state()
@@ -831,7 +832,7 @@ fn bc_ordering_and_bounds_on_the_paper_rve() {
         None,
     );
     // The damage made the RVE softer than the intact one.
-    assert!(excess(&mat(&periodic.elastic_tangent), &tangents[2]) > -PSD_TOL);
+    assert!(excess(&mat(&periodic.elastic_tangent()), &tangents[2]) > -PSD_TOL);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -921,7 +922,7 @@ fn updates_are_trials() {
             .report
     };
     let (closed, damaging) = (iterations(closed_eps), iterations(damaging_eps));
-    assert_eq!(closed.contact, model.disc.history_len());
+    assert_eq!(closed.contact, model.discretization().history_len());
     assert!(closed.iterations < damaging.iterations && damaging.substeps == 1);
     let max_iterations = format!("max_iterations = {}", closed.iterations);
     let strict = two_circles(
@@ -1013,10 +1014,10 @@ fn elastic_tangent_converges_under_mesh_refinement() {
                 let mut all = vec![("size = 0.84\n", size_line.as_str()), ("interface_size = 0.48", itz_line.as_str())];
                 all.extend_from_slice(more);
                 let model = model_of(&common::paper_scene_with(&all));
-                let d = model.elastic_tangent;
+                let d = model.elastic_tangent();
                 println!(
                     "{label:20} mesh {size}/{itz}: {:5} triangles  D11 {:.2} D22 {:.2} D12 {:.2} D33 {:.2} D13 {:.3}",
-                    model.disc.bulk.len(),
+                    model.discretization().bulk.len(),
                     d[0], d[4], d[1], d[8], d[2]
                 );
                 d
@@ -1052,8 +1053,8 @@ fn elastic_tangent_converges_under_mesh_refinement() {
 fn minimal_bc_multipliers_are_the_homogenized_stress() {
     for analysis in ANALYSES {
         let model = two_circles("minimal", analysis, &[]);
-        let n_reduced = model.disc.dofs.n_reduced;
-        assert_eq!(model.disc.n(), n_reduced + 4);
+        let n_reduced = model.discretization().dofs.n_reduced;
+        assert_eq!(model.discretization().n(), n_reduced + 4);
         let mut inst = Instance::new(model.clone());
         let mut ws = model.workspace();
         for (k, eps) in [
@@ -1124,7 +1125,7 @@ fn stress_is_the_area_average_of_element_stresses() {
             .unwrap();
         assert_eq!(r.stress.map(f64::to_bits), base.stress.map(f64::to_bits));
         let mesh = model.mesh();
-        let reduced = &model.disc.dofs.reduced;
+        let reduced = &model.discretization().dofs.reduced;
         let fluctuation = |dof: usize| match reduced[dof] {
             FIXED => 0.0,
             k => trial.unknowns[k as usize],
@@ -1295,7 +1296,7 @@ fn perfect_bonding_is_answered_without_a_factorization() {
                     ),
                 ],
             );
-            assert!(model.disc.interfaces.is_empty());
+            assert!(model.discretization().interfaces.is_empty());
             let mut ws = model.workspace();
             let mut inst = Instance::new(model.clone());
             inst.update([1e-4, -3e-5, 0.0], &mut ws, TangentRequest::Consistent)
@@ -1308,7 +1309,7 @@ fn perfect_bonding_is_answered_without_a_factorization() {
             assert_eq!(fast.report.factorizations, 0, "{bc} {analysis}");
             assert_eq!(fast.report.iterations, 0, "{bc} {analysis}");
             // Linear: the stress is the elastic tangent times the strain.
-            let d = mat(&model.elastic_tangent);
+            let d = mat(&model.elastic_tangent());
             let linear = d * nalgebra::Vector3::from(eps);
             let scale = linear.norm();
             for i in 0..3 {
@@ -1318,12 +1319,12 @@ fn perfect_bonding_is_answered_without_a_factorization() {
                     fast.stress
                 );
             }
-            assert!(rel_diff(&fast.tangent, &model.elastic_tangent) < 1e-14);
+            assert!(rel_diff(&fast.tangent, &model.elastic_tangent()) < 1e-14);
             // The general path, from the same committed state.
             let problem = Problem {
-                disc: &model.disc,
-                linear: &model.linear,
-                settings: &model.solver,
+                disc: model.discretization(),
+                linear: model.linear_solver(),
+                settings: model.settings(),
                 predictor: &[],
             };
             let mut trial = model.new_state();
@@ -1338,12 +1339,17 @@ fn perfect_bonding_is_answered_without_a_factorization() {
             .unwrap();
             let (report, tangent) = (
                 solved.report,
-                model.hom.tangent_from_condensed(&solved.condensed),
+                model
+                    .homogenizer()
+                    .tangent_from_condensed(&solved.condensed),
             );
             if bc != "taylor" {
                 assert!(report.factorizations >= 1, "{bc} {analysis}: {report:?}");
             }
-            let (stress, _) = model.hom.stress(&model.disc, &eps, &trial.unknowns);
+            let (stress, _) =
+                model
+                    .homogenizer()
+                    .stress(model.discretization(), &eps, &trial.unknowns);
             for i in 0..3 {
                 assert!(
                     (fast.stress[i] - stress[i]).abs() <= 1e-10 * scale,

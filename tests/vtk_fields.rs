@@ -27,7 +27,7 @@ fn area_average_of_cell_stresses_is_the_homogenized_stress() {
         let fields = model.fields(instance.committed()).unwrap();
         assert_eq!(fields.stress.len(), model.mesh().triangles.len());
         assert_eq!(fields.itz.len(), model.mesh().interfaces.len());
-        let avg = fields.average_stress(model.disc.volume);
+        let avg = fields.average_stress(model.discretization().volume);
         let scale = fields
             .stress
             .iter()
@@ -45,7 +45,7 @@ fn area_average_of_cell_stresses_is_the_homogenized_stress() {
         for e in &fields.itz {
             let m = e.measures;
             assert!(m.max_opening_ratio >= 0.0 && (0.0..1.0).contains(&m.damage));
-            assert!(e.closed_points <= model.disc.points_per_interface());
+            assert!(e.closed_points <= model.discretization().points_per_interface());
             match e.branch {
                 BRANCH_LOADING => seen[0] = true,
                 BRANCH_UNLOADING => seen[1] = true,

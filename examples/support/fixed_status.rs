@@ -26,7 +26,7 @@ pub fn solve_fixed(
     status: &[bool],
     ws: &mut Workspace,
 ) -> Option<Solved> {
-    let disc = &model.disc;
+    let disc = &model.discretization();
     let n = disc.n();
     let mut gr = vec![0.0; n];
     for (c, e) in eps.iter().enumerate() {
@@ -35,7 +35,7 @@ pub fn solve_fixed(
         }
     }
     let reference = norm(&gr).max(1e-8 * norm(&disc.g));
-    let tol = model.solver.tolerance * reference;
+    let tol = model.settings().tolerance * reference;
     let mut x = x0.to_vec();
     let mut hist = base.to_vec();
     let (mut r, mut k) = (vec![0.0; n], vec![0.0; disc.pattern.nnz()]);
@@ -63,10 +63,10 @@ pub fn solve_fixed(
             });
         }
         ws.factorization()
-            .factorize(&model.linear, &disc.pattern.symbolic, &k, true)
+            .factorize(model.linear_solver(), &disc.pattern.symbolic, &k, true)
             .ok()?;
         let mut dx: Vec<f64> = r.iter().map(|v| -v).collect();
-        ws.factorization().solve(&model.linear, &mut dx, 1);
+        ws.factorization().solve(model.linear_solver(), &mut dx, 1);
         // Backtracking on ||R|| (the law is continuous with the status fixed, but has the
         // loading/unloading kinks).
         let mut alpha = 1.0;

@@ -7,8 +7,7 @@ use std::sync::Arc;
 
 use clap::Args;
 use rve::error::Result;
-use rve::mesh::MeshStats;
-use rve::solver::Integration;
+use rve::Integration;
 use rve::{Instance, Model, TangentRequest};
 use serde::Serialize;
 
@@ -26,7 +25,7 @@ pub struct InfoArgs {
 #[derive(Serialize)]
 struct Info {
     scene: String,
-    analysis: rve::material::Analysis,
+    analysis: rve::Analysis,
     integration: &'static str,
     nodes: usize,
     triangles: usize,
@@ -49,12 +48,12 @@ struct Info {
 pub fn run(args: &InfoArgs) -> Result<()> {
     let (scene, name) = load_scene(args.scene.as_ref())?;
     let model = Arc::new(Model::from_scene(&scene)?);
-    let stats = MeshStats::of(&model.microstructure.mesh);
+    let stats = model.mesh_stats();
     let (instance_bytes, checkpoint_bytes) = loaded_instance_bytes(&model)?;
     let info = Info {
         scene: name,
         analysis: scene.spec.cell.analysis,
-        integration: match model.solver.integration {
+        integration: match model.integration() {
             Integration::Implicit => "implicit",
             Integration::Implex => "implex",
         },

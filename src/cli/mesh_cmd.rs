@@ -8,8 +8,8 @@ use std::time::Instant;
 use clap::Args;
 use rve::error::{Error, Result};
 use rve::io::{write_svg, write_vtu};
-use rve::mesh::MeshStats;
 use rve::model::build_microstructure;
+use rve::MeshStats;
 use serde::Serialize;
 
 use super::load_scene;

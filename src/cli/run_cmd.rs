@@ -87,8 +87,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if !args.quiet {
         eprintln!(
             "{name}: {} unknowns, {} interface elements, model built in {:.1} ms",
-            model.disc.n(),
-            model.disc.interfaces.len(),
+            model.unknowns(),
+            model.interface_elements(),
             1e3 * setup
         );
     }

@@ -4,4 +4,6 @@
 pub mod interface4;
 pub mod triangle;
 
-pub use interface4::{InterfaceGeometry, InterfaceQuadrature, InterfaceResponse, MAX_POINTS};
+pub use interface4::{InterfaceGeometry, InterfaceQuadrature};
+#[cfg(any(test, feature = "internals"))]
+pub use interface4::{InterfaceResponse, MAX_POINTS};

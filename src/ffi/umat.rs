@@ -10,7 +10,7 @@ use std::sync::{LazyLock, Mutex, PoisonError};
 
 use super::boundary::{guard, slice, slice_mut, Failure, FfiResult};
 use super::status::RveStatus;
-use crate::host::umat::{global, UmatCall, UmatOutputs, FAILURE_STEP_RATIO};
+use crate::host::umat::{global, request_step_ratio, UmatCall, UmatOutputs, FAILURE_STEP_RATIO};
 use crate::host::Hypothesis;
 
 /// CMNAME is `CHARACTER*80` in Abaqus: no more is read.
@@ -310,7 +310,7 @@ pub unsafe extern "C" fn rve_umat(
         let message = super::last_error_message();
         print_once("", &message, &format!("mesorve UMAT: {message}"));
         if let Some(p) = pnewdt.as_mut() {
-            *p = FAILURE_STEP_RATIO;
+            request_step_ratio(p, FAILURE_STEP_RATIO);
         }
     }
 }

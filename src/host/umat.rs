@@ -6,7 +6,7 @@
 //! - **`STATEV` mode** (`NSTATV` >= the model's [`Model::statev_len`](crate::Model::statev_len), which `rve info`
 //!   prints as `umat_nstatv`; the recommended mode). The point's committed RVE state is
 //!   `STATEV(1:umat_nstatv)`: its core (strain, interface history, contact status,
-//!   IMPL-EX's data) as integer-valued doubles with a checksum ([`statev`]); all zeros is
+//!   IMPL-EX's data) as integer-valued doubles with a checksum (`statev`); all zeros is
 //!   a virgin RVE. Each call solves from the state `STATEV` holds, at the total strain
 //!   `STRAN + DSTRAN` and the time increment `DTIME`, and writes the trial's core back.
 //!   The host keeps the values of the converged increment, hands the start-of-increment
@@ -318,6 +318,16 @@ impl Point {
 type MaterialEntry = Result<Arc<Material>, Arc<Error>>;
 type PointRef = Arc<Mutex<Point>>;
 
+/// Asks the host for `ratio` times the increment through `PNEWDT`, keeping a smaller
+/// request of an earlier point of the increment. A value that is not positive is no
+/// request: Abaqus hands `PNEWDT` in large, CalculiX as -1 (and any positive value it
+/// gets back cuts the increment).
+pub fn request_step_ratio(pnewdt: &mut f64, ratio: f64) {
+    if !(*pnewdt > 0.0 && *pnewdt <= ratio) {
+        *pnewdt = ratio;
+    }
+}
+
 /// A failed call before it is reported: the error, whether it is reported for the first
 /// time, and the material when known (for the elastic DDSDDE).
 struct Failed {
@@ -333,7 +343,7 @@ fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
         return;
     }
     let ratio = r.report.suggested_step_ratio();
-    *out.pnewdt = out.pnewdt.min(ratio);
+    request_step_ratio(out.pnewdt, ratio);
     STEP_NOTE.call_once(|| {
         eprintln!(
             "mesorve: element {}, point {}: the RVE's answer depends on the size of this \
@@ -630,7 +640,7 @@ impl Umat {
             } => suggested_step_ratio,
             _ => FAILURE_STEP_RATIO,
         };
-        *out.pnewdt = pnewdt;
+        request_step_ratio(out.pnewdt, pnewdt);
         let n = c.hypothesis.ntens();
         if out.ddsdde.len() == n * n {
             match material {

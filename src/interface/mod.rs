@@ -6,7 +6,9 @@ mod implex;
 mod law;
 mod linear;
 
-pub use cohesive::{CohesiveHistory, CohesiveLaw, CohesivePoint, ContactShear, Penalty};
+pub use cohesive::{CohesiveLaw, ContactShear, Penalty};
+#[cfg(any(test, feature = "internals"))]
+pub use cohesive::{CohesiveHistory, CohesivePoint};
 pub use implex::Implex;
 pub use law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
 pub use linear::LinearInterface;

@@ -116,7 +116,7 @@ impl Instance {
     /// [`update`](Self::update) over a host time increment `dt` (`DTIME`; 0 or negative:
     /// none given). Implicit integration ignores it; IMPL-EX scales its extrapolation by
     /// the ratio of this step's `dt` to the last committed one's (see
-    /// [`crate::solver::implex`]).
+    /// `crate::solver::implex`).
     pub fn update_timed(
         &mut self,
         strain: [f64; 3],
@@ -331,7 +331,7 @@ impl Instance {
         Ok(())
     }
 
-    /// The committed core of the pending trial (see [`crate::state::statev`]): what a host
+    /// The committed core of the pending trial (see `crate::state::statev`): what a host
     /// keeping the state in its own variables stores after this update. `NoTrial` when
     /// there is no pending trial.
     pub fn trial_core(&self) -> Result<Core> {

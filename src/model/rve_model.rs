@@ -10,7 +10,7 @@ use crate::assembly::{Discretization, DiscretizationSpec};
 use crate::constraint::BoundaryCondition;
 use crate::error::{Error, Result};
 use crate::homogenization::Homogenizer;
-use crate::mesh::{Mesh, Microstructure};
+use crate::mesh::{Mesh, MeshStats, Microstructure};
 use crate::scene::{Scene, MAX_STRAIN};
 use crate::solver::{
     fast_path, implex, solve_increment, step_check, Answer, IncrementReport, Integration,
@@ -35,21 +35,22 @@ pub struct Response {
     pub report: IncrementReport,
 }
 
-/// Everything that instances of one scene share. Immutable once built.
+/// Everything that instances of one scene share. Immutable once built; read it through
+/// its methods.
 pub struct Model {
     pub(super) id: u64,
-    pub scene: Scene,
-    pub microstructure: Microstructure,
-    pub disc: Discretization,
-    pub hom: Homogenizer,
+    pub(crate) scene: Scene,
+    pub(crate) microstructure: Microstructure,
+    pub(crate) disc: Discretization,
+    pub(crate) hom: Homogenizer,
     /// Symbolic LL^T and LU analyses of the pattern.
-    pub linear: LinearSolver,
-    pub solver: Settings,
+    pub(crate) linear: LinearSolver,
+    pub(crate) solver: Settings,
     /// Homogenized tangent of the virgin RVE (row-major), and its `s_zz` row.
-    pub elastic_tangent: [f64; 9],
-    pub elastic_s_zz_tangent: [f64; 3],
+    pub(crate) elastic_tangent: [f64; 9],
+    pub(crate) elastic_s_zz_tangent: [f64; 3],
     /// `-K_el^-1 G` of the virgin RVE (n x 3): the solver's predictor.
-    pub elastic_sensitivity: Vec<f64>,
+    pub(crate) elastic_sensitivity: Vec<f64>,
 }
 
 impl std::fmt::Debug for Model {
@@ -140,9 +141,39 @@ impl Model {
         )
     }
 
-    /// The mesh.
+    /// The mesh (for the writers of [`crate::io`]).
     pub fn mesh(&self) -> &Mesh {
         &self.microstructure.mesh
+    }
+
+    /// The scene the model was built from.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Homogenized tangent of the virgin RVE, row-major `d sigma_i / d eps_j`.
+    pub fn elastic_tangent(&self) -> [f64; 9] {
+        self.elastic_tangent
+    }
+
+    /// Number of unknowns of the RVE's linear systems (displacements and multipliers).
+    pub fn unknowns(&self) -> usize {
+        self.disc.n()
+    }
+
+    /// Number of interface (ITZ) elements.
+    pub fn interface_elements(&self) -> usize {
+        self.disc.interfaces.len()
+    }
+
+    /// Counts and quality figures of the mesh.
+    pub fn mesh_stats(&self) -> MeshStats {
+        MeshStats::of(&self.microstructure.mesh)
+    }
+
+    /// How the interface history is integrated (`[solver] integration`).
+    pub fn integration(&self) -> Integration {
+        self.solver.integration
     }
 
     /// Trial update: solves the RVE at macro strain `strain` starting from `committed`,
@@ -150,7 +181,7 @@ impl Model {
     /// and (if asked) the consistent tangent. Never modifies `committed`; identical inputs
     /// give bit-identical outputs.
     ///
-    /// The trial keeps the fast path's data ([`crate::state::LinearBranch`]) when every
+    /// The trial keeps the fast path's data (`crate::state::LinearBranch`) when every
     /// interface point ends on a linear branch and the tangent was requested; this
     /// function always solves ([`Model::fast_update`] is the fast path).
     pub fn update(
@@ -215,7 +246,7 @@ impl Model {
     }
 
     /// An IMPL-EX update at `strain` from `committed` for a host time increment `dt` (0:
-    /// none, see [`crate::solver::implex`]). With `reuse`, `trial.linear` already holds the
+    /// none, see `crate::solver::implex`). With `reuse`, `trial.linear` already holds the
     /// step of this `committed` state and this `dt` ratio, and the answer costs no
     /// factorization; otherwise the step is assembled and factorized once and kept there.
     /// Never modifies `committed`. The tangent is the step's `D_ex`, symmetric positive
@@ -274,7 +305,7 @@ impl Model {
         })
     }
 
-    /// The fast path's answer at `strain` from `committed` (see [`crate::solver::fast_path`]):
+    /// The fast path's answer at `strain` from `committed` (see `crate::solver::fast_path`):
     /// `Some` when every interface point provably stays on the linear branch of the
     /// committed state's branch set, `None` when the update needs a solve. Exact to
     /// round-off against [`Model::update`]; the trial state is `committed` at `strain`
@@ -311,7 +342,7 @@ impl Model {
     }
 
     /// `state` with its unknowns at its own strain: itself, or (after fast updates, see
-    /// [`crate::state::LinearBranch`]) a copy with `X_b eps` formed, which costs one
+    /// `crate::state::LinearBranch`) a copy with `X_b eps` formed, which costs one
     /// factorization in a workspace made for it. For outputs, not for the hot path.
     pub fn current_state<'s>(&self, state: &'s State) -> Result<Cow<'s, State>> {
         if state.unknowns_are_current() {
@@ -361,4 +392,32 @@ fn check_strain(strain: [f64; 3]) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// The model's parts, for the verification tests and benches (`internals` feature).
+#[cfg(feature = "internals")]
+impl Model {
+    pub fn microstructure(&self) -> &Microstructure {
+        &self.microstructure
+    }
+
+    pub fn discretization(&self) -> &Discretization {
+        &self.disc
+    }
+
+    pub fn homogenizer(&self) -> &Homogenizer {
+        &self.hom
+    }
+
+    pub fn linear_solver(&self) -> &LinearSolver {
+        &self.linear
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.solver
+    }
+
+    pub fn elastic_sensitivity(&self) -> &[f64] {
+        &self.elastic_sensitivity
+    }
 }

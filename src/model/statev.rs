@@ -23,7 +23,7 @@ impl Model {
         self.disc.interface_points()
     }
 
-    /// `STATEV` entries a host needs to keep this model's state ([`statev::values_needed`]).
+    /// `STATEV` entries a host needs to keep this model's state (`statev::values_needed`).
     pub fn statev_len(&self) -> usize {
         statev::values_needed(
             self.state_sizes(),
@@ -66,7 +66,7 @@ impl Model {
     /// The full state a committed `core` stands for (`None`: the virgin state), a function
     /// of the core alone, so that a host's restart, cut-back or new analysis gives what the
     /// uninterrupted run gives from the same values. Implicit integration forms the
-    /// fluctuation by one secant solve ([`implex::secant_unknowns`]) and the points held
+    /// fluctuation by one secant solve (`implex::secant_unknowns`) and the points held
     /// against their gap; IMPL-EX needs no fluctuation (its step solves for it). No
     /// sensitivity, path curvature or fast-path data: the next update starts from the
     /// elastic predictor.

@@ -186,7 +186,7 @@ pub struct ItzSpec {
     pub penalty: PenaltySpec,
     /// What carries the shear of a closed point: `"penalty"` (the paper's eq. 47, default)
     /// or `"cohesive"` (Ortiz-Pandolfi: normal penalty only, continuous at closure). See
-    /// [`crate::interface::ContactShear`].
+    /// `crate::interface::ContactShear`.
     #[serde(default)]
     pub contact_shear: crate::interface::ContactShear,
 }

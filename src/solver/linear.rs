@@ -48,7 +48,7 @@ use faer::{Conj, MatMut, Par, Side};
 use super::supernodal_solve;
 use crate::error::{LinearAlgebraError, Result};
 
-/// Which factorization a [`NumericFactor`] holds.
+/// Which factorization a `NumericFactor` holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FactorKind {
     /// LDL^T without pivoting, every pivot positive: the matrix is positive definite.

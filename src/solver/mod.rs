@@ -26,8 +26,16 @@ mod supernodal_solve;
 mod tangent;
 mod workspace;
 
-pub use increment::{solve_increment, Solved};
-pub use linear::{FactorKind, LinearSolver, NumericFactor};
-pub use problem::{Problem, Strain};
+pub use increment::solve_increment;
+#[cfg(any(test, feature = "internals"))]
+pub use increment::Solved;
+pub use linear::{FactorKind, LinearSolver};
+#[cfg(any(test, feature = "internals"))]
+pub use linear::NumericFactor;
+pub use problem::Problem;
+#[cfg(any(test, feature = "internals"))]
+pub use problem::Strain;
 pub use settings::{Answer, ContactStatus, IncrementReport, Integration, Settings, TangentRequest};
-pub use workspace::{Factorization, Workspace};
+pub use workspace::Workspace;
+#[cfg(any(test, feature = "internals"))]
+pub use workspace::Factorization;

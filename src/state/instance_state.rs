@@ -16,13 +16,13 @@ pub struct State {
     /// element-major (for the paper's law, `delta_max` per point).
     pub history: Vec<f64>,
     /// Fluctuation sensitivity `X = dx/d eps = -K^-1 G` at this state, kept to predict
-    /// the next increment (see [`Sensitivity`]).
+    /// the next increment (see `Sensitivity`).
     pub sensitivity: Sensitivity,
     /// The second-order term of the fluctuation path, from the increment that led here
-    /// (see [`PathCurvature`]).
+    /// (see `PathCurvature`).
     pub curvature: PathCurvature,
     /// The fast path's data while every interface point is on a linear branch (see
-    /// [`LinearBranch`]); when valid, `unknowns` hold the fluctuation at
+    /// `LinearBranch`); when valid, `unknowns` hold the fluctuation at
     /// `linear.unknowns_strain`, which may differ from `strain`.
     pub linear: LinearBranch,
     /// The interface points this state holds at a contact status their gap contradicts
@@ -31,7 +31,7 @@ pub struct State {
     /// update starts from the status this state is in equilibrium with: the gaps' status
     /// with these points flipped. All zero when every point agrees with its gap.
     pub held_contact: Vec<u64>,
-    /// What IMPL-EX integration keeps besides `history` (see [`ImplexHistory`]); empty
+    /// What IMPL-EX integration keeps besides `history` (see `ImplexHistory`); empty
     /// with implicit integration.
     pub implex: ImplexHistory,
 }
@@ -95,7 +95,7 @@ pub fn held_contact_words(n_history: usize) -> usize {
 /// Values per quantization block of a [`Quantized`] vector.
 pub const SENSITIVITY_BLOCK: usize = 32;
 
-/// A vector stored in 8-bit fixed point by blocks: block `b` of [`SENSITIVITY_BLOCK`]
+/// A vector stored in 8-bit fixed point by blocks: block `b` of `SENSITIVITY_BLOCK`
 /// consecutive values holds `round(127 v_i / scale_b)` with `scale_b = max |v_i|` over the
 /// block (f32, rounded up so that `|v_i| / scale_b <= 1`). The error of a value is at most
 /// half a step, `scale_b / 254`. Empty until first stored.
@@ -274,7 +274,7 @@ impl State {
     }
 
     /// Whether `unknowns` hold the fluctuation at `strain` (false after fast updates: the
-    /// fluctuation is then `X_b strain`, see [`LinearBranch`]).
+    /// fluctuation is then `X_b strain`, see `LinearBranch`).
     pub fn unknowns_are_current(&self) -> bool {
         !self.linear.valid || self.linear.unknowns_strain == self.strain
     }

@@ -28,12 +28,12 @@
 //! | 1 | 0.1.0 | `[delta_max, t_max]` per point (read, `t_max` dropped) |
 //! | 2 | main after 0.1.0 | `delta_max` per point (read, no sensitivity: the next increment starts from the elastic predictor) |
 //! | 3 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 16-bit (read, sensitivity dropped: the next increment starts from the elastic predictor) |
-//! | 4 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 8-bit by blocks, empty until filled ([`Sensitivity`]) (read, kept) |
-//! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled ([`PathCurvature`](super::PathCurvature)) (read, kept) |
+//! | 4 | main after 0.1.0 | format 2 plus the predictor's sensitivity `X`, 8-bit by blocks, empty until filled (`Sensitivity`) (read, kept) |
+//! | 5 | main after 0.1.0 | format 4 plus the path curvature, 8-bit by blocks, empty until filled (`PathCurvature`) (read, kept) |
 //! | 6 | 0.2.0 | format 5 plus the trailing CRC-32C (read, kept; no fast-path data: the next update solves) |
-//! | 7 | main after 0.2.0 | format 6 plus the fast path's [`LinearBranch`](super::LinearBranch) (read, kept; no point held against its gap) |
+//! | 7 | main after 0.2.0 | format 6 plus the fast path's `LinearBranch` (read, kept; no point held against its gap) |
 //! | 8 | main after 0.2.0 | format 7 plus the points held at a contact status their gap contradicts, a bitset ([`State::held_contact`]) (read, kept; no IMPL-EX history) |
-//! | 9 | 0.3.0 | format 8 plus IMPL-EX's previous history, step and contact status ([`ImplexHistory`](super::ImplexHistory)), empty with implicit integration (written) |
+//! | 9 | 0.3.0 | format 8 plus IMPL-EX's previous history, step and contact status (`ImplexHistory`), empty with implicit integration (written) |
 //!
 //! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
 //! model, so this module depends on the state alone; `model::Instance::save_state` and
