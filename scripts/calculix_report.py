@@ -54,6 +54,17 @@
       sets BANDLOW and BANDTOP) and of the two sound rows there. Exit status 1 unless the
       force falls after its peak by at least DROP while U grows, the band stretches and
       the sound rows contract (unload).
+
+  calculix_report.py snap REFERENCE.csv LABEL=JOB:EXPECT ...
+      specimen_snap.inp's runs (one element pulled in one step through the RVE's
+      snap-back) against `rve run` of the same path in 100 increments (REFERENCE.csv, its
+      force 10 sig_xx, at the run's last time on the reference's grid): the force at the
+      end, increments, cut-backs, whether the UMAT printed its step-check line and what
+      ccx did with its PNEWDT, as Markdown. EXPECT: `+`-separated checks of the run:
+      `flagged` (the step-check line is in JOB.log), `stopped` (ccx stopped the DIRECT
+      step: "solution seems to diverge"), `cut` (ccx cut an attempt "through pnewdt", to
+      SNAP_RATIO of its size), `close` (it finished within SNAP_TOLERANCE of the
+      reference's end), `-` none. Exit status 1 when a check fails, with the reasons.
 """
 import re
 import sys
@@ -68,6 +79,15 @@ DROP = 0.01
 # ccx's convergence criterion tolerates (0.5 % of the average force): an unloading that
 # does not end at the origin fails.
 ZERO_FORCE = 1e-9
+# The RVE's lower branch after the snap-back, on the path of specimen_snap.inp: `rve run` in
+# 16 to 400 increments ends at 3.2043 to 3.2138 N/mm^2 (0.30 % apart: which ITZ points crack
+# depends a little on the path), ccx in STATEV mode 0.04 % from `rve run`; the upper branch
+# that a too large increment lands on is 32-33 % above. 1 % is three times the first
+# spread and a thirtieth of the jump: a run within it has taken the snap.
+SNAP_TOLERANCE = 0.01
+# The step ratio the step check asks for (PNEWDT), by which ccx cuts an automatic increment.
+SNAP_RATIO = 0.5
+PNEWDT_CUT = "increment size decrease requested by a material user routine (through pnewdt)"
 
 
 def dat_blocks(path, kind, nset=None):
@@ -395,6 +415,89 @@ def iterations(step, runs):
               "residuals (%) " + ", ".join(f"{v:.1e}" for v in seq))
 
 
+def pnewdt_cuts(job):
+    """The ratios (reattempted size / cut size) of the cut-backs in JOB.sta."""
+    rows = []
+    with open(job + ".sta") as f:
+        for line in f:
+            m = re.match(r"\s*(\d+)\s+(\d+)\s+(\d+)(U?)\s+\d+\s+\S+\s+\S+\s+(\S+)", line)
+            if m:
+                rows.append((m.group(4) == "U", float(m.group(5))))
+    return [b[1] / a[1] for a, b in zip(rows, rows[1:]) if a[0]]
+
+
+def snap_run(job):
+    """The figures of one specimen_snap.inp run (see `snap`)."""
+    with open(job + ".log") as f:
+        log = f.read()
+    forces = dat_blocks(job + ".dat", "force", "RIGHT")
+    rows = sta(job)
+    end = max(forces) if forces else 0.0
+    return {"finished": "Job finished" in log,
+            "stopped": "solution seems to diverge" in log,
+            "flagged": "depends on the size of this increment" in log,
+            "pnewdt": log.count(PNEWDT_CUT), "ratios": pnewdt_cuts(job),
+            "increments": sum(r[3] for r in rows), "cut": sum(not r[3] for r in rows),
+            "time": end, "force": forces[end][0][0] if forces else float("nan")}
+
+
+def snap_failures(label, r, gap):
+    """The failed checks of a run (`snap`); gap: its end force against the reference's."""
+    ratios = ", ".join(f"{q:.4g}" for q in r["ratios"]) or "none"
+    checks = {"flagged": (r["flagged"], "the UMAT printed no step-check line"),
+              "stopped": (r["stopped"], "ccx did not stop the DIRECT step"),
+              "cut": (r["pnewdt"] > 0 and r["ratios"] and
+                      all(abs(q - SNAP_RATIO) < 1e-9 for q in r["ratios"]),
+                      f"ccx cut {r['pnewdt']} attempts through PNEWDT, by {ratios} "
+                      f"(expected {SNAP_RATIO})"),
+              "close": (r["finished"] and abs(gap) <= SNAP_TOLERANCE,
+                        f"finished {r['finished']}, force {gap:+.2%} of the reference "
+                        f"(tolerance {SNAP_TOLERANCE:.0%})")}
+    return [f"{label}: {checks[e][1]}" for e in r["expect"] if not checks[e][0]]
+
+
+def snap_reference(path):
+    """{time: force} of `rve run` in 100 increments (its step k at time k / 100)."""
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+        rows = [l.split(",") for l in f if l.strip()]
+    k, sxx = header.index("step"), header.index("sig_xx")
+    return {round(int(r[k]) / len(rows), 9): 10 * float(r[sxx]) for r in rows}
+
+
+def snap_reaction(r):
+    """What ccx did with the UMAT's PNEWDT in run r, for the table."""
+    if r["stopped"]:
+        return "stopped the step"
+    if r["pnewdt"]:
+        return "cut " + ", ".join(f"by {q:g}" for q in r["ratios"])
+    return "nothing"
+
+
+def snap(reference_csv, runs):
+    reference = snap_reference(reference_csv)
+    final = reference[1.0]
+    print(f"Reference: `rve run`, 100 increments: {final:.4f} N at the end.\n")
+    print("| run | finished | increments | failed attempts | end time | force (N) | "
+          "against `rve run` at that time | step-check line | ccx on PNEWDT |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    failures = []
+    for arg in runs:
+        label, rest = arg.split("=", 1)
+        job, expect = rest.rsplit(":", 1)
+        r = snap_run(job)
+        r["expect"] = [] if expect == "-" else expect.split("+")
+        status = "yes" if r["finished"] else ("stopped" if r["stopped"] else "no")
+        at = reference.get(round(r["time"], 9))
+        gap = f"{r['force'] / at - 1:+.2%}" if at else "-"
+        print(f"| {label} | {status} | {r['increments']} | {r['cut']} | {r['time']:.4f} | "
+              f"{r['force']:.4f} | {gap} | {'yes' if r['flagged'] else 'no'} | "
+              f"{snap_reaction(r)} |")
+        failures += snap_failures(label, r, r["force"] / final - 1)
+    if failures:
+        sys.exit("\n".join(f"calculix_report.py snap: {m}" for m in failures))
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "homogeneous":
         homogeneous(sys.argv[2], sys.argv[3])
@@ -415,5 +518,7 @@ if __name__ == "__main__":
          "factorizations": factorizations}[sys.argv[1]](runs)
     elif sys.argv[1] == "band":
         band(sys.argv[2])
+    elif sys.argv[1] == "snap":
+        snap(sys.argv[2], sys.argv[3:])
     else:
         sys.exit(__doc__)
