@@ -81,9 +81,10 @@ DROP = 0.01
 ZERO_FORCE = 1e-9
 # The RVE's lower branch after the snap-back, on the path of specimen_snap.inp: `rve run` in
 # 16 to 400 increments ends at 3.2043 to 3.2138 N/mm^2 (0.30 % apart: which ITZ points crack
-# depends a little on the path), ccx in STATEV mode 0.04 % from `rve run`; the upper branch
-# that a too large increment lands on is 32-33 % above. 1 % is three times the first
-# spread and a thirtieth of the jump: a run within it has taken the snap.
+# depends a little on the path), ccx in STATEV mode 0.04 % from `rve run` (100 DIRECT
+# increments, before the step check's PNEWDT reached ccx, which now stops them); the upper
+# branch that a too large increment lands on is 32-33 % above. 1 % is three times the
+# first spread and a thirtieth of the jump: a run within it has taken the snap.
 SNAP_TOLERANCE = 0.01
 # The step ratio the step check asks for (PNEWDT), by which ccx cuts an automatic increment.
 SNAP_RATIO = 0.5
