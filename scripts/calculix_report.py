@@ -138,14 +138,14 @@ def homogeneous(dat, csv):
 
 
 def sta(job):
-    """[(step, inc, attempt, converged, iterations)] from JOB.sta."""
+    """[(step, inc, attempt, converged, iterations, increment size)] from JOB.sta."""
     out = []
     with open(job + ".sta") as f:
         for line in f:
-            m = re.match(r"\s*(\d+)\s+(\d+)\s+(\d+)(U?)\s+(\d+)\s", line)
+            m = re.match(r"\s*(\d+)\s+(\d+)\s+(\d+)(U?)\s+(\d+)\s+\S+\s+\S+\s+(\S+)", line)
             if m:
                 out.append((int(m.group(1)), int(m.group(2)), int(m.group(3)),
-                            m.group(4) != "U", int(m.group(5))))
+                            m.group(4) != "U", int(m.group(5)), float(m.group(6))))
     return out
 
 
@@ -418,13 +418,8 @@ def iterations(step, runs):
 
 def pnewdt_cuts(job):
     """The ratios (reattempted size / cut size) of the cut-backs in JOB.sta."""
-    rows = []
-    with open(job + ".sta") as f:
-        for line in f:
-            m = re.match(r"\s*(\d+)\s+(\d+)\s+(\d+)(U?)\s+\d+\s+\S+\s+\S+\s+(\S+)", line)
-            if m:
-                rows.append((m.group(4) == "U", float(m.group(5))))
-    return [b[1] / a[1] for a, b in zip(rows, rows[1:]) if a[0]]
+    rows = sta(job)
+    return [b[5] / a[5] for a, b in zip(rows, rows[1:]) if not a[3]]
 
 
 def snap_run(job):

@@ -56,6 +56,8 @@ struct At {
     /// TIME(2) at the start of the increment.
     start: f64,
     dtime: f64,
+    /// PNEWDT as the host hands it in (Abaqus: large; CalculiX: -1).
+    pnewdt: f64,
 }
 
 fn at(noel: i32, kinc: i32) -> At {
@@ -66,6 +68,7 @@ fn at(noel: i32, kinc: i32) -> At {
         kinc,
         start: 0.1 * f64::from(kinc - 1),
         dtime: 0.1,
+        pnewdt: 1e36,
     }
 }
 
@@ -90,26 +93,12 @@ fn call(
     strain: &[f64],
     a: At,
 ) -> Answer {
-    call_with_pnewdt(umat, cmname, props, h, start, strain, a, 1e36)
-}
-
-/// [`call`] with `PNEWDT` handed in as `pnewdt` (Abaqus: large; CalculiX: -1).
-#[allow(clippy::too_many_arguments)]
-fn call_with_pnewdt(
-    umat: &Umat,
-    cmname: &str,
-    props: &[f64],
-    h: Hypothesis,
-    start: &[f64],
-    strain: &[f64],
-    a: At,
-    mut pnewdt: f64,
-) -> Answer {
     let n = h.ntens();
     let dstran: Vec<f64> = strain.iter().zip(start).map(|(e, s)| e - s).collect();
     let mut stress = vec![UNTOUCHED; n];
     let mut ddsdde = vec![UNTOUCHED; n * n];
     let mut statev = [0.0; 3];
+    let mut pnewdt = a.pnewdt;
     let c = UmatCall {
         cmname,
         props,
@@ -753,28 +742,32 @@ fn a_step_over_a_snap_back_asks_for_half_the_step_from_any_host() {
         let mut start = [0.0; 3];
         for kinc in 1..=10 {
             let strain = uniaxial(1.5e-5 * f64::from(kinc));
-            let a = ok(call_with_pnewdt(
+            let a = ok(call(
                 &umat,
                 "PAPER",
                 &[],
                 Hypothesis::PlaneStress,
                 &start,
                 &strain,
-                at(noel, kinc),
-                handed_in,
+                At {
+                    pnewdt: handed_in,
+                    ..at(noel, kinc)
+                },
             ));
             assert_eq!(a.pnewdt, handed_in, "increment {kinc} is not flagged");
             start = strain;
         }
-        let last = ok(call_with_pnewdt(
+        let last = ok(call(
             &umat,
             "PAPER",
             &[],
             Hypothesis::PlaneStress,
             &start,
             &uniaxial(2.25e-4),
-            at(noel, 11),
-            handed_in,
+            At {
+                pnewdt: handed_in,
+                ..at(noel, 11)
+            },
         ));
         assert_eq!(last.pnewdt, expected, "PNEWDT handed in as {handed_in}");
     }
