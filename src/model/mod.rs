@@ -4,6 +4,7 @@
 //! the numerical modules' own types.
 
 pub mod cache;
+mod fingerprint;
 mod from_scene;
 mod instance;
 mod microstructure;
