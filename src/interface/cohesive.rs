@@ -518,6 +518,7 @@ impl InterfaceLaw for CohesiveLaw {
         Some(PointMeasures {
             opening_ratio: point.opening / self.delta_c,
             max_opening_ratio: max_ratio,
+            max_opening: h.delta_max,
             damage: -(-max_ratio).exp_m1(),
         })
     }

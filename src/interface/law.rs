@@ -49,6 +49,8 @@ pub struct PointMeasures {
     pub opening_ratio: f64,
     /// Largest effective opening reached over the characteristic one, `delta_max/delta_c`.
     pub max_opening_ratio: f64,
+    /// Largest effective opening reached, `delta_max` (length units).
+    pub max_opening: f64,
     /// Secant stiffness loss in `[0, 1)`: `1 - k_unloading / k_virgin`.
     pub damage: f64,
 }
