@@ -88,9 +88,20 @@ fn measures(
 }
 
 /// The mirrors of a point: its id and the answer's iterations and sub-steps, then the
-/// measures of the history `instance` leaves for the host.
-pub fn mirrors(id: u64, iterations: u32, substeps: u32, instance: &Instance) -> [f64; MIRRORS] {
-    let m = RveMeasures::of(instance.model(), instance.trial_history());
+/// measures of the history `instance` leaves for the host, computed only when `room` (the
+/// entries the host has for mirrors) reaches them (a pass over the ITZ points).
+pub fn mirrors(
+    id: u64,
+    iterations: u32,
+    substeps: u32,
+    instance: &Instance,
+    room: usize,
+) -> [f64; MIRRORS] {
+    let m = if room > 3 {
+        RveMeasures::of(instance.model(), instance.trial_history())
+    } else {
+        RveMeasures::default()
+    };
     [
         id as f64,
         f64::from(iterations),

@@ -754,7 +754,8 @@ fn write_outputs(
         }
         _ => 0,
     };
-    let mirrors = mirrors(p.id, r.report.iterations, r.report.substeps, &p.instance);
+    let room = out.statev.len() - mirrors_at;
+    let mirrors = mirrors(p.id, r.report.iterations, r.report.substeps, &p.instance, room);
     for (s, m) in out.statev[mirrors_at..].iter_mut().zip(mirrors) {
         *s = m;
     }
