@@ -1,8 +1,9 @@
 //! The host seam (`rve::host`): the NTENS 3/4/6 maps against the RVE's own answer, the
 //! UMAT's DDSDDE against finite differences of its STRESS (the `s_zz` row included), the
 //! increment protocol (commit on a new increment, revert on a cut-back, repeats answered
-//! without a solve), scene lookup and PROPS, a missing scene (and one written later), and
-//! threads.
+//! without a solve), scene lookup and PROPS, a missing scene (the embedded RVE's elastic
+//! tangent in DDSDDE; a scene written later is found), the damage and opening mirrors,
+//! and threads.
 
 mod common;
 
