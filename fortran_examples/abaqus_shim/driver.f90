@@ -10,22 +10,7 @@ program driver
   use, intrinsic :: iso_c_binding, only: c_double, c_int, c_size_t
   use rve, only: rve_umat
   implicit none
-  interface
-    subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpldt, &
-        stran, dstran, time, dtime, temp, dtemp, predef, dpred, cmname, ndi, nshr, ntens, &
-        nstatv, props, nprops, coords, drot, pnewdt, celent, dfgrd0, dfgrd1, noel, npt, &
-        layer, kspt, kstep, kinc)
-      import :: c_double, c_int
-      integer(c_int), intent(in) :: ndi, nshr, ntens, nstatv, nprops, noel, npt, layer, &
-          kspt, kstep, kinc
-      real(c_double), intent(inout) :: stress(ntens), statev(nstatv), ddsdde(ntens, ntens), &
-          sse, spd, scd, rpl, ddsddt(ntens), drplde(ntens), drpldt, pnewdt
-      real(c_double), intent(in) :: stran(ntens), dstran(ntens), time(2), dtime, temp, &
-          dtemp, predef(1), dpred(1), props(nprops), coords(3), drot(3, 3), celent, &
-          dfgrd0(3, 3), dfgrd1(3, 3)
-      character(len=80), intent(in) :: cmname
-    end subroutine umat
-  end interface
+  external :: umat   ! the shim, called as Abaqus calls it (an implicit interface)
   integer(c_int), parameter :: ntens = 4
   real(c_double) :: stress(ntens, 2), ddsdde(ntens, ntens, 2), stran(ntens), dstran(ntens)
   real(c_double), allocatable :: statev(:, :)
