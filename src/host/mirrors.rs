@@ -72,12 +72,13 @@ fn measures(
     for (e, geometry) in interfaces.iter().enumerate() {
         let h = &history[e * per_element..(e + 1) * per_element];
         for (p, &(_, w)) in rule.iter().enumerate() {
-            let Some(m) = law.measures(&h[p * hl..(p + 1) * hl], [0.0, 0.0], geometry.length)
+            let Some((damage, opening)) =
+                law.history_measures(&h[p * hl..(p + 1) * hl], geometry.length)
             else {
                 return RveMeasures::default();
             };
-            weighted += 0.5 * w * geometry.length * m.damage;
-            max_opening = max_opening.max(m.max_opening);
+            weighted += 0.5 * w * geometry.length * damage;
+            max_opening = max_opening.max(opening);
         }
         length += geometry.length;
     }
@@ -149,5 +150,17 @@ mod tests {
         );
         assert_eq!(one.max_opening, 10.0 * delta_c);
         assert!(one.damage > 0.0 && one.damage < 1.0);
+        // The history-only shortcut equals the law's full measures.
+        let law = disc.law.as_deref().unwrap();
+        for x in [0.0, 0.3, 1.0, 7.5] {
+            let h = [x * delta_c];
+            let full = law.measures(&h, [1e-5, -2e-5], 0.5).unwrap();
+            let quick = law.history_measures(&h, 0.5).unwrap();
+            assert!(
+                (quick.0 - full.damage).abs() <= 1e-15,
+                "{x}: {quick:?} {full:?}"
+            );
+            assert_eq!(quick.1, full.max_opening);
+        }
     }
 }

@@ -755,7 +755,13 @@ fn write_outputs(
         _ => 0,
     };
     let room = out.statev.len() - mirrors_at;
-    let mirrors = mirrors(p.id, r.report.iterations, r.report.substeps, &p.instance, room);
+    let mirrors = mirrors(
+        p.id,
+        r.report.iterations,
+        r.report.substeps,
+        &p.instance,
+        room,
+    );
     for (s, m) in out.statev[mirrors_at..].iter_mut().zip(mirrors) {
         *s = m;
     }

@@ -523,6 +523,12 @@ impl InterfaceLaw for CohesiveLaw {
         })
     }
 
+    /// `1 - exp(-delta_max/delta_c)` and `delta_max`, without evaluating the law.
+    fn history_measures(&self, history: &[f64], _length: f64) -> Option<(f64, f64)> {
+        let delta_max = history[0];
+        Some((-(-delta_max / self.delta_c).exp_m1(), delta_max))
+    }
+
     /// With the paper's contact law read from the gap at every evaluation, closed points
     /// that slide can leave the RVE without equilibrium (see the module docs); the message
     /// names the remedy. (The solver asks only when it did not hold the status.)

@@ -156,6 +156,14 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         None
     }
 
+    /// `(damage, max_opening)` of [`InterfaceLaw::measures`], which depend on the history
+    /// alone: for the UMAT's mirrors, once per call over every point. The default asks
+    /// `measures` at a zero jump; a law whose `measures` costs more overrides it.
+    fn history_measures(&self, history: &[f64], length: f64) -> Option<(f64, f64)> {
+        self.measures(history, [0.0, 0.0], length)
+            .map(|m| (m.damage, m.max_opening))
+    }
+
     /// Something to add to the message of a failed solve whose last iterate has
     /// `closed_points` points in contact, if the law knows why that may fail.
     fn failure_hint(&self, _closed_points: usize) -> Option<String> {
