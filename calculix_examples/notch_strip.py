@@ -20,8 +20,8 @@ NOTCHES = ((0.0, 10.0, 20.0, 30.0), (70.0, 80.0, 20.0, 30.0))  # x0, x1, y0, y1
 UMAX = 0.020
 MATERIAL = "@ABAQUS_RVE_UMAT@CONCRETE_IMPLEX"
 # STATEV mode: `rve info calculix_examples/concrete_implex.toml`'s umat_nstatv (790) and
-# the three inspection mirrors (docs/calculix.md, "State in STATEV").
-DEPVAR = 793
+# the five inspection mirrors (docs/guide.md, *DEPVAR).
+DEPVAR = 795
 
 
 def grid(h):

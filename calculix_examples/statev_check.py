@@ -34,7 +34,7 @@ when a check fails.
   statev_check.py depvar RVE DECK...
       Fails unless every *DEPVAR of the decks' mesorve materials (`@ABAQUS_RVE_UMAT@SCENE`,
       SCENE.toml beside the deck) is at least the scene's umat_nstatv (`RVE info SCENE
-      --json`) + 3: STATEV mode with the inspection mirrors.
+      --json`) + 5: STATEV mode with the inspection mirrors.
   statev_check.py homogeneous DAT CSV
       The homogeneous specimen run in STATEV mode against `rve run` (as calculix_report.py
       homogeneous, which holds table mode to 1e-6): prints the largest difference, fails
@@ -56,7 +56,7 @@ DIFFER = 1e-3
 # |STRAN - committed strain| a CalculiX analysis must stay below: the UMAT refuses above
 # 1e-9 of the strain (plus 1e-12), here ~1e-13; this is a thousandth of that.
 STRAN_AGREEMENT = 1e-16
-MIRRORS = 3
+MIRRORS = 5
 # The homogeneous specimen in STATEV mode differs from `rve run` by 2.1e-5 of the largest
 # stress at the RVE's snap (increment 21; docs/calculix.md); table mode is held to 1e-6.
 HOMOGENEOUS_STATEV = 1e-4

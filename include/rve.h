@@ -417,14 +417,16 @@ const char *rve_status_message(uint32_t code);
 // - the state: with `NSTATV` >= the scene's `umat_nstatv` (`rve info`), the point's
 //   RVE state is `STATEV(1..umat_nstatv)`, read at every call and written with the
 //   trial (integers below 2^48 with a checksum; all zeros: virgin), and the host owns
-//   it; `STATEV(umat_nstatv+1..+3)` get the mirrors (point id, RVE iterations,
-//   sub-steps). With a smaller `NSTATV` the state lives in the library per (`NOEL`,
+//   it; `STATEV(umat_nstatv+1..+5)` get the mirrors (point id, RVE iterations,
+//   sub-steps, damage, largest ITZ opening). With a smaller `NSTATV` the state lives in
+//   the library per (`NOEL`,
 //   `NPT`): a new increment (`KSTEP`/`KINC` changed or `TIME(2)` advanced) commits the
 //   last trial, a cut-back (same increment after a failure or with a smaller `DTIME`)
 //   reverts, `KSTEP`/`TIME(2)` going back restarts the point from virgin, and
-//   `STATEV(1..3)` get the mirrors;
+//   `STATEV(1..5)` get the mirrors;
 // - outputs: `STRESS`, `DDSDDE` (`NTENS` x `NTENS`, column-major), `STATEV`; on failure
-//   (a corrupted `STATEV` among the reasons)
+//   (a corrupted `STATEV` among the reasons) `DDSDDE` the elastic tangent of the
+//   material's virgin RVE (of the embedded paper RVE when the material is unknown),
 //   `PNEWDT` < 1, a message in `rve_last_error`, `STRESS` untouched, and a line on
 //   stderr the first time the process meets the reason (the material and the error's
 //   text up to its numbers: a layout the RVE cannot answer prints one line, not one per

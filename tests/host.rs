@@ -1,8 +1,9 @@
 //! The host seam (`rve::host`): the NTENS 3/4/6 maps against the RVE's own answer, the
 //! UMAT's DDSDDE against finite differences of its STRESS (the `s_zz` row included), the
 //! increment protocol (commit on a new increment, revert on a cut-back, repeats answered
-//! without a solve), scene lookup and PROPS, a missing scene (and one written later), and
-//! threads.
+//! without a solve), scene lookup and PROPS, a missing scene (the embedded RVE's elastic
+//! tangent in DDSDDE; a scene written later is found), the damage and opening mirrors,
+//! and threads.
 
 mod common;
 
@@ -76,7 +77,7 @@ struct Answer {
     result: Result<rve::host::Outcome, UmatFailure>,
     stress: Vec<f64>,
     ddsdde: Vec<f64>,
-    statev: [f64; 3],
+    statev: [f64; 5],
     pnewdt: f64,
 }
 
@@ -97,7 +98,7 @@ fn call(
     let dstran: Vec<f64> = strain.iter().zip(start).map(|(e, s)| e - s).collect();
     let mut stress = vec![UNTOUCHED; n];
     let mut ddsdde = vec![UNTOUCHED; n * n];
-    let mut statev = [0.0; 3];
+    let mut statev = [0.0; 5];
     let mut pnewdt = a.pnewdt;
     let c = UmatCall {
         cmname,
@@ -595,6 +596,53 @@ fn scenes_are_found_by_material_name_and_props_override_keys() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Table mode: `STATEV(4..5)` mirror the RVE's damage and largest ITZ opening, those of
+/// the state the call leaves (`rve::host::mirrors`), growing past the peak.
+#[test]
+fn mirrors_hold_the_rve_damage_and_largest_opening() {
+    let dir = scene_dir("mirrors");
+    let umat = Umat::new(SearchPath::new([dir.clone()]));
+    let paper = model(&dir, "paper");
+    let mut reference = Instance::new(paper.clone());
+    let mut ws = paper.workspace();
+    let mut start = [0.0; 3];
+    let mut last = (0.0, 0.0);
+    for (k, level) in [0.5e-4, 1.5e-4, 2.5e-4, 3.5e-4].into_iter().enumerate() {
+        let eps = [level, 0.0, 0.0];
+        let kinc = k as i32 + 1;
+        let a = ok(call(
+            &umat,
+            "PAPER",
+            &[],
+            Hypothesis::PlaneStress,
+            &start,
+            &eps,
+            at(1, kinc),
+        ));
+        reference
+            .update(eps, &mut ws, TangentRequest::Consistent)
+            .unwrap();
+        let m = rve::host::RveMeasures::of(&paper, reference.trial_history());
+        reference.commit().unwrap();
+        assert_eq!(
+            [a.statev[3], a.statev[4]],
+            [m.damage, m.max_opening],
+            "increment {kinc}"
+        );
+        assert!(
+            (0.0..1.0).contains(&m.damage) && m.damage >= last.0,
+            "{m:?}"
+        );
+        assert!(m.max_opening >= last.1, "{m:?}");
+        last = (m.damage, m.max_opening);
+        start = eps;
+    }
+    // Past the RVE's peak (about 2.2e-4): ITZ points beyond delta_c (2e-4 mm), damage well
+    // above its value at the first increment.
+    assert!(last.1 > 2e-4 && last.0 > 0.1, "{last:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn a_missing_scene_is_a_clear_error_reported_once() {
     let dir = scene_dir("missing");
@@ -632,10 +680,45 @@ fn a_missing_scene_is_a_clear_error_reported_once() {
     assert!(f.first_report);
     assert_eq!(a.pnewdt, 0.25);
     assert!(a.stress.iter().all(|&s| s == UNTOUCHED));
-    assert!(
-        a.ddsdde.iter().all(|&d| d == 0.0),
-        "DDSDDE zero without a material"
+    // DDSDDE: the embedded paper RVE's elastic tangent (docs/umat.md, "Failures"), so
+    // that a host assembling it gets a regular matrix, in its own layout.
+    let d = cache::model_for_text(rve::scene::DEFAULT_SCENE_TOML, None)
+        .unwrap()
+        .elastic_tangent();
+    for i in 0..3 {
+        for j in 0..3 {
+            assert_eq!(a.ddsdde[i + 3 * j], d[3 * i + j], "DDSDDE({i}, {j})");
+        }
+    }
+    assert!(d[0] > 1e4 && d[4] > 1e4 && d[8] > 1e3, "{d:?}");
+    // NTENS 6 (CalculiX's 2D elements): in-plane block at [11, 22, 12], (D11 + D22) / 2
+    // on 33, D33 on 13 and 23, zero elsewhere (the embedded RVE is in plane stress: no
+    // s_zz row).
+    let t = call(
+        &umat,
+        "@ABAQUS_RVE_UMAT@NO_SUCH_SCENE",
+        &[],
+        Hypothesis::Tridimensional,
+        &[0.0; 6],
+        &host_strain(Hypothesis::Tridimensional, eps),
+        at(5, 1),
     );
+    assert!(t.result.is_err());
+    let mut want = [0.0; 36];
+    for (i, &hi) in [0, 1, 3].iter().enumerate() {
+        for (j, &hj) in [0, 1, 3].iter().enumerate() {
+            want[hi + 6 * hj] = d[3 * i + j];
+        }
+    }
+    want[2 + 6 * 2] = 0.5 * (d[0] + d[4]);
+    want[4 + 6 * 4] = d[8];
+    want[5 + 6 * 5] = d[8];
+    assert_eq!(
+        t.ddsdde,
+        want.to_vec(),
+        "NTENS 6 DDSDDE of the embedded RVE"
+    );
+    assert!(t.stress.iter().all(|&s| s == UNTOUCHED));
     let b = call(
         &umat,
         "@ABAQUS_RVE_UMAT@NO_SUCH_SCENE",
@@ -647,7 +730,7 @@ fn a_missing_scene_is_a_clear_error_reported_once() {
     );
     let f = b.result.unwrap_err();
     assert!(!f.first_report, "the same material error is reported once");
-    assert_eq!(umat.stats().failures, 2);
+    assert_eq!(umat.stats().failures, 3);
     assert_eq!(umat.stats().points, 0);
     // A scene file written after the failures is found at the next call.
     std::fs::copy(dir.join("paper.toml"), dir.join("no_such_scene.toml")).unwrap();

@@ -263,3 +263,27 @@ fn a_second_analysis_may_use_another_material_at_the_same_points() {
     let (fresh, _) = run(&umat(), "paper_rve_host_implex", 1, 0..5, vec![0.0; 3]);
     assert_eq!(again, fresh);
 }
+
+/// STATEV mode with room for the five mirrors: `STATEV(n+4..n+5)` hold the damage and the
+/// largest opening of the state `STATEV(1:n)` stands for (`rve::host::RveMeasures` of its
+/// decoded history), past the peak; with room for three, the same state and the first
+/// mirrors.
+#[test]
+fn statev_mode_writes_the_damage_and_opening_mirrors() {
+    let cmname = "paper_rve";
+    let model = cache::model_for_file(&common::repo("scenes/paper_rve.toml")).unwrap();
+    let n = model.statev_len();
+    let (_, end) = run(&umat(), cmname, 31, 0..22, vec![0.0; n + 5]);
+    let core = rve::state::statev::read(&end[..n], model.state_sizes(), model.interface_points())
+        .unwrap()
+        .expect("a damaged state");
+    let m = rve::host::RveMeasures::of(&model, &core.history);
+    assert_eq!([end[n + 3], end[n + 4]], [m.damage, m.max_opening]);
+    assert!(
+        m.damage > 0.3 && m.damage < 1.0 && m.max_opening > 2e-4,
+        "{m:?}"
+    );
+    let (_, end3) = run(&umat(), cmname, 32, 0..22, vec![0.0; n + 3]);
+    assert_eq!(end3[..n], end[..n], "the same state with fewer mirrors");
+    assert_eq!(end3[n + 1..], end[n + 1..n + 3], "iterations and sub-steps");
+}

@@ -393,7 +393,7 @@ fn a_depvar_short_of_the_state_is_an_error_naming_the_count() {
     let dir = scene_dir("short", &[]);
     let n = statev_len(&dir);
     let host = Host::new(&dir, "PAPER", &[]);
-    for nstatv in [4, n / 2, n - 1] {
+    for nstatv in [rve::host::TABLE_MODE_MAX_NSTATV + 1, n / 2, n - 1] {
         let zeros = vec![0.0; nstatv];
         let called = host.call(1, 0, &zeros);
         assert_refused(

@@ -6,16 +6,20 @@
 //!   `DDSDDE` included;
 //! - [`material`]: the scene a material name selects on a search path, with `PROPS`
 //!   overrides;
+//! - [`mirrors`]: the values the UMAT writes after the RVE state for a host to plot
+//!   (point id, iterations, sub-steps, the RVE's damage, its largest ITZ opening);
 //! - [`umat`]: the Abaqus UMAT: instances per (element, integration point), committed and
 //!   reverted by the host's increments.
 
 pub mod hypothesis;
 pub mod material;
+pub mod mirrors;
 pub mod umat;
 
 pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};
 pub use material::{Material, SearchPath, SCENE_PATH_VAR};
+pub use mirrors::{RveMeasures, MIRRORS};
 pub use umat::{
-    global, strain_mismatch, Outcome, Umat, UmatCall, UmatFailure, UmatOutputs, UmatStats, MIRRORS,
+    global, strain_mismatch, Outcome, Umat, UmatCall, UmatFailure, UmatOutputs, UmatStats,
     STRAIN_MATCH_FLOOR, STRAIN_MATCH_RELATIVE, TABLE_MODE_MAX_NSTATV,
 };

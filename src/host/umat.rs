@@ -15,7 +15,7 @@
 //!   or revert rule to guess. The table's instance of the point is a cache of that
 //!   state, rebuilt ([`Model::expand_core`](crate::Model::expand_core)) whenever the values differ from the ones it
 //!   was rebuilt from, so the answer is a function of `STATEV`, the strain and `DTIME`
-//!   alone. `STATEV(umat_nstatv+1..+3)` receive the inspection mirrors below. A
+//!   alone. `STATEV(umat_nstatv+1..+5)` receive the inspection mirrors below. A
 //!   `STATEV` that is not exactly what the library wrote (flipped bits, a changed,
 //!   zeroed or truncated entry, another model's state) fails the call with a message, and
 //!   so does a valid state that is not this point's at this increment: written under
@@ -34,9 +34,10 @@
 //! **Instances.** The first call for `(NOEL, NPT)` resolves the material (`CMNAME` and
 //! `PROPS`, see [`super::material`]) and creates a virgin instance of its model; the
 //! instance lives in the table until the process ends. When `NSTATV` allows, the
-//! mirrors (`STATEV(1:3)` in table mode, after the state in `STATEV` mode) receive the
-//! point's id in the table (1, 2, ... in creation order), the RVE's Newton iterations
-//! and its sub-steps, for inspection; the library never reads them.
+//! mirrors (`STATEV(1:5)` in table mode, after the state in `STATEV` mode) receive the
+//! point's id in the table (1, 2, ... in creation order), the RVE's Newton iterations,
+//! its sub-steps, its damage and its largest ITZ opening ([`super::mirrors`]), for
+//! inspection; the library never reads them.
 //!
 //! **Increments (table mode).** A call belongs to the increment `(KSTEP, KINC, TIME(2))`,
 //! `TIME(2)` being the total time at its start. Every call is a trial from the point's
@@ -65,7 +66,8 @@
 //! **Failures** (a missing scene, a host convention the RVE cannot answer, a solver
 //! failure) never panic across the boundary: `PNEWDT` receives a ratio below 1 (the
 //! solver's suggestion after a solver failure, [`FAILURE_STEP_RATIO`] otherwise),
-//! `DDSDDE` the elastic tangent when the material is known (zero otherwise), `STRESS` is
+//! `DDSDDE` the elastic tangent of the material's virgin RVE (of the embedded paper RVE
+//! when the material is unknown: a scene not found, a bad name or `PROPS`), `STRESS` is
 //! left as it came, and [`UmatFailure`] says what went wrong; the C shim prints it on
 //! stderr and keeps it for `rve_last_error`.
 //!
@@ -79,6 +81,7 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockEr
 
 use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath};
+use super::mirrors::{mirrors, MIRRORS};
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
@@ -268,8 +271,6 @@ fn check_start_time(p: &Point, c: &UmatCall, check: bool) -> crate::Result<()> {
 pub const STRAIN_MATCH_RELATIVE: f64 = 1e-9;
 /// The absolute floor of the strain match (at zero strain), strain units.
 pub const STRAIN_MATCH_FLOOR: f64 = 1e-12;
-/// The inspection mirrors after the state (point id, iterations, sub-steps).
-pub const MIRRORS: usize = 3;
 /// `NSTATV` up to this keeps the state in the library's table (room for the mirrors).
 pub const TABLE_MODE_MAX_NSTATV: usize = MIRRORS;
 
@@ -709,6 +710,13 @@ impl Umat {
         entry.map_err(|e| (e, !reported))
     }
 
+    /// The embedded paper RVE, whose elastic tangent a failed call without a material
+    /// (a scene not found, a bad name or `PROPS`) returns: a host that assembles it gets
+    /// a regular matrix, not the zeros on which CalculiX reports a singular system.
+    fn embedded(&self) -> crate::Result<Material> {
+        Material::resolve("", &[], &self.search)
+    }
+
     fn fail(
         &self,
         c: &UmatCall,
@@ -727,12 +735,13 @@ impl Umat {
         request_step_ratio(out.pnewdt, pnewdt);
         let n = c.hypothesis.ntens();
         if out.ddsdde.len() == n * n {
-            match material {
-                Some(m) => {
+            let elastic = material
+                .map(|m| m.elastic)
+                .or_else(|| self.embedded().ok().map(|m| m.elastic));
+            match elastic {
+                Some(e) => {
                     // Lengths checked: cannot fail.
-                    let _ = c
-                        .hypothesis
-                        .host_tangent(&m.elastic, &m.elastic.tangent, out.ddsdde);
+                    let _ = c.hypothesis.host_tangent(&e, &e.tangent, out.ddsdde);
                 }
                 None => out.ddsdde.fill(0.0),
             }
@@ -873,8 +882,8 @@ fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
 }
 
 /// Writes `STRESS`, `DDSDDE` and `STATEV`: in `STATEV` mode (`Some(len)`) the trial's
-/// core in `STATEV(1:len)` and the inspection mirrors (point id, RVE iterations,
-/// sub-steps) after it, in table mode the mirrors from `STATEV(1)`; `PNEWDT` < 1 when
+/// core in `STATEV(1:len)` and the inspection mirrors ([`super::mirrors`]) after it, in
+/// table mode the mirrors from `STATEV(1)`; `PNEWDT` < 1 when
 /// the answer depends on the increment's size.
 fn write_outputs(
     p: &Point,
@@ -895,11 +904,14 @@ fn write_outputs(
         }
         _ => 0,
     };
-    let mirrors = [
-        p.id as f64,
-        r.report.iterations as f64,
-        r.report.substeps as f64,
-    ];
+    let room = out.statev.len() - mirrors_at;
+    let mirrors = mirrors(
+        p.id,
+        r.report.iterations,
+        r.report.substeps,
+        &p.instance,
+        room,
+    );
     for (s, m) in out.statev[mirrors_at..].iter_mut().zip(mirrors) {
         *s = m;
     }

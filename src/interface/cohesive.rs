@@ -518,8 +518,15 @@ impl InterfaceLaw for CohesiveLaw {
         Some(PointMeasures {
             opening_ratio: point.opening / self.delta_c,
             max_opening_ratio: max_ratio,
+            max_opening: h.delta_max,
             damage: -(-max_ratio).exp_m1(),
         })
+    }
+
+    /// `1 - exp(-delta_max/delta_c)` and `delta_max`, without evaluating the law.
+    fn history_measures(&self, history: &[f64], _length: f64) -> Option<(f64, f64)> {
+        let delta_max = history[0];
+        Some((-(-delta_max / self.delta_c).exp_m1(), delta_max))
     }
 
     /// With the paper's contact law read from the gap at every evaluation, closed points

@@ -49,6 +49,8 @@ pub struct PointMeasures {
     pub opening_ratio: f64,
     /// Largest effective opening reached over the characteristic one, `delta_max/delta_c`.
     pub max_opening_ratio: f64,
+    /// Largest effective opening reached, `delta_max` (length units).
+    pub max_opening: f64,
     /// Secant stiffness loss in `[0, 1)`: `1 - k_unloading / k_virgin`.
     pub damage: f64,
 }
@@ -152,6 +154,14 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
     /// opening.
     fn measures(&self, _history: &[f64], _jump: [f64; 2], _length: f64) -> Option<PointMeasures> {
         None
+    }
+
+    /// `(damage, max_opening)` of [`InterfaceLaw::measures`], which depend on the history
+    /// alone: for the UMAT's mirrors, once per call over every point. The default asks
+    /// `measures` at a zero jump; a law whose `measures` costs more overrides it.
+    fn history_measures(&self, history: &[f64], length: f64) -> Option<(f64, f64)> {
+        self.measures(history, [0.0, 0.0], length)
+            .map(|m| (m.damage, m.max_opening))
     }
 
     /// Something to add to the message of a failed solve whose last iterate has

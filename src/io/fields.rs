@@ -31,7 +31,7 @@ pub struct ItzFields {
     pub shear_opening: f64,
     /// Mean normal jump `delta_n` (> 0 open, < 0 interpenetration).
     pub normal_opening: f64,
-    /// Mean `delta/delta_c`, `delta_max/delta_c` and damage of the points (NaN when the
+    /// Mean `delta/delta_c`, `delta_max/delta_c`, `delta_max` and damage of the points (NaN when the
     /// law has no characteristic opening or the scene has no interface law).
     pub measures: PointMeasures,
     /// The majority branch of the points: [`BRANCH_LOADING`], [`BRANCH_UNLOADING`] or
@@ -114,6 +114,7 @@ impl RveFields {
         let nan = PointMeasures {
             opening_ratio: f64::NAN,
             max_opening_ratio: f64::NAN,
+            max_opening: f64::NAN,
             damage: f64::NAN,
         };
         disc.interfaces
@@ -128,6 +129,7 @@ impl RveFields {
                 let mut m = PointMeasures {
                     opening_ratio: 0.0,
                     max_opening_ratio: 0.0,
+                    max_opening: 0.0,
                     damage: 0.0,
                 };
                 let mut has_measures = true;
@@ -141,6 +143,7 @@ impl RveFields {
                         Some(pm) => {
                             m.opening_ratio += w * pm.opening_ratio;
                             m.max_opening_ratio += w * pm.max_opening_ratio;
+                            m.max_opening += w * pm.max_opening;
                             m.damage += w * pm.damage;
                         }
                         None => has_measures = false,

@@ -357,6 +357,16 @@ impl Instance {
         Ok(())
     }
 
+    /// The interface history of the pending trial, or of the committed state when there is
+    /// none: the history of the state a host keeps after this update (as
+    /// [`trial_core`](Self::trial_core) writes it). Allocates nothing.
+    pub fn trial_history(&self) -> &[f64] {
+        match (self.pending, &self.trial) {
+            (Pending::Solved, Some(trial)) => &trial.history,
+            _ => &self.committed.history,
+        }
+    }
+
     /// Bytes owned by this instance (committed and, once allocated, trial states).
     pub fn state_bytes(&self) -> usize {
         self.committed.bytes() + self.trial.as_ref().map_or(0, State::bytes)
