@@ -274,9 +274,15 @@ fn statev_mode_writes_the_damage_and_opening_mirrors() {
     let model = cache::model_for_file(&common::repo("scenes/paper_rve.toml")).unwrap();
     let n = model.statev_len();
     let (_, end) = run(&umat(), cmname, 31, 0..22, vec![0.0; n + 5]);
-    let core = rve::state::statev::read(&end[..n], model.state_sizes(), model.interface_points())
-        .unwrap()
-        .expect("a damaged state");
+    let core = rve::state::statev::read(
+        &end[..n],
+        model.state_sizes(),
+        model.interface_points(),
+        model.fingerprint(),
+    )
+    .unwrap()
+    .expect("a damaged state")
+    .core;
     let m = rve::host::RveMeasures::of(&model, &core.history);
     assert_eq!([end[n + 3], end[n + 4]], [m.damage, m.max_opening]);
     assert!(
