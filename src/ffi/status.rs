@@ -159,6 +159,8 @@ impl From<&Error> for RveStatus {
             Error::StateVersion { .. } => RveStatus::StateVersion,
             Error::StateMismatch { .. } => RveStatus::StateMismatch,
             Error::HostConvention(_) => RveStatus::InvalidArgument,
+            Error::Panic(_) => RveStatus::Panic,
+            Error::Threads(_) => RveStatus::Internal,
         }
     }
 }
