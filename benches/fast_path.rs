@@ -81,7 +81,7 @@ fn main() {
         if k >= 21 && r.report.answer == Answer::FastPath {
             // The same state for the full solve, with its unknowns formed.
             let current = fast_model.current_state(inst.committed()).unwrap();
-            full.load_state(&persist::encode(&current, sizes).unwrap())
+            full.load_state(&persist::encode(&current, sizes, fast_model.fingerprint()).unwrap())
                 .unwrap();
             let (mut tf, mut ts) = (Vec::new(), Vec::new());
             for _ in 0..5 {

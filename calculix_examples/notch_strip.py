@@ -19,9 +19,9 @@ WIDTH, HEIGHT = 80.0, 50.0
 NOTCHES = ((0.0, 10.0, 20.0, 30.0), (70.0, 80.0, 20.0, 30.0))  # x0, x1, y0, y1
 UMAX = 0.020
 MATERIAL = "@ABAQUS_RVE_UMAT@CONCRETE_IMPLEX"
-# STATEV mode: `rve info calculix_examples/concrete_implex.toml`'s umat_nstatv (789) and
+# STATEV mode: `rve info calculix_examples/concrete_implex.toml`'s umat_nstatv (790) and
 # the three inspection mirrors (docs/calculix.md, "State in STATEV").
-DEPVAR = 792
+DEPVAR = 793
 
 
 def grid(h):

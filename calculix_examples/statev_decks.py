@@ -3,8 +3,8 @@
 "State in STATEV: restart and *MODEL CHANGE") on stdout, from specimen_weak.inp (the
 weakened strip, 36 CPE4 elements, IMPL-EX; read from this directory).
 
-  statev_decks.py restart --depvar N [--pair] --part full|1|2
-  statev_decks.py modelchange --depvar N
+  statev_decks.py restart --depvar N [--pair] --part full|1|2 [--scene NAME]
+  statev_decks.py modelchange --depvar N [--scene NAME]
 
 Every *DEPVAR becomes N: `rve info`'s umat_nstatv (789 for concrete_implex.toml) keeps the
 RVE state in STATEV, a smaller N (3) the library's table.
@@ -24,6 +24,10 @@ modelchange: step 1 as above; step 2 removes the column of elements 6, 18, 30 (x
 60 mm, the weakened element 18 in its middle; *MODEL CHANGE, TYPE=ELEMENT, REMOVE) and
 unloads to U = 0; step 3 adds it back (ADD=WITHSTRAIN: ccx's default, strain-free
 addition, needs NLGEOM) and loads to U = 4e-3 mm in 5 increments.
+
+`--scene NAME` makes the materials use NAME.toml instead of concrete_implex.toml (the
+check's host that zeroes the re-added elements' STATEV needs a scene that says so,
+`[statev] zero_at_strain = "virgin"`).
 """
 import argparse
 import os
@@ -99,6 +103,8 @@ def with_cards(step, cards, target=None, increment=None):
 def header(a):
     what = (f"restart --depvar {a.depvar}" + (" --pair" if a.pair else "") + f" --part {a.part}"
             if a.deck == "restart" else f"modelchange --depvar {a.depvar}")
+    if a.scene:
+        what += f" --scene {a.scene}"
     return [f"** Written by calculix_examples/statev_decks.py {what}",
             f"** from {SOURCE} (the weakened strip, IMPL-EX); see the script's docstring."]
 
@@ -129,6 +135,10 @@ if __name__ == "__main__":
     p.add_argument("--depvar", type=int, required=True)
     p.add_argument("--pair", action="store_true")
     p.add_argument("--part", choices=("full", "1", "2"), default="full")
+    p.add_argument("--scene", help="the scene of the materials instead of CONCRETE_IMPLEX")
     args = p.parse_args()
     lines = restart(args) if args.deck == "restart" else modelchange(args)
+    if args.scene:
+        lines = [l.replace("@ABAQUS_RVE_UMAT@CONCRETE_IMPLEX", "@ABAQUS_RVE_UMAT@" + args.scene)
+                 for l in lines]
     print("\n".join(lines))

@@ -1,7 +1,7 @@
 /* umat_log.c -- a libRVE.so for ccx that records mesorve's UMAT calls bit for bit: its UMAT
  * forwards every call to rve_umat (librve.so) and appends one line per call to the file
  * named by MESORVE_UMAT_LOG (default umat_log.txt):
- *   KSTEP KINC TIME(2) DTIME NOEL NPT ENTRY STRAIN(1..NTENS) STRESS(1..NTENS) HASH TWIN
+ *   KSTEP KINC TIME(2) DTIME NOEL NPT ENTRY STRAIN(1..NTENS) STRESS(1..NTENS) HASH TWIN MATCH
  * TIME(2) and DTIME as %.17g; the total strain STRAN + DSTRAN and STRESS in C's %a (the
  * doubles' exact bits: two logs agree only when the answers do bit for bit). ENTRY is what
  * STATEV(1:NSTATV) held when ccx called: `zero` when all zeros (a virgin RVE in STATEV
@@ -14,6 +14,10 @@
  * (ENTRY is then `reset`), and the same call is repeated for a twin point (element
  * NOEL + 1000000, never called before: a fresh RVE) with its own zeroed STATEV; TWIN says
  * whether the twin's STRESS equals the point's bit for bit (`same`) or not (`differ`).
+ * MATCH is the largest |STRAN - the strain the handed STATEV was committed at| over
+ * eps_xx, eps_yy, gamma_xy (%.3e), read from the state's payload (docs/statev.md: entries
+ * 5-8 hold its first 24 bytes, the committed strain), or `-` for a zero STATEV: how far
+ * the host's STRAN is from the library's own record (the UMAT refuses beyond 1e-9 of it).
  *
  * scripts/test-calculix builds it and runs the restart and model-change decks of
  * calculix_examples/statev_decks.py with it, MESORVE_UMAT_LOG=JOB.calls
@@ -70,6 +74,33 @@ static int reset_call(int kstep, int kinc, int noel) {
   return 0;
 }
 
+/* The committed strain [eps_xx, eps_yy, gamma_xy] of a mesorve STATEV: the payload's first
+ * 24 bytes, 6 per entry from entry 4 (0-based; docs/statev.md). */
+static void committed_strain(const double *statev, double strain[3]) {
+  unsigned char bytes[24];
+  for (int e = 0; e < 4; e++) {
+    uint64_t v = (uint64_t)statev[4 + e];
+    for (int b = 0; b < 6; b++) bytes[6 * e + b] = (unsigned char)(v >> (8 * b));
+  }
+  memcpy(strain, bytes, sizeof bytes); /* little-endian doubles, as on x86_64 */
+}
+
+/* The MATCH column: |STRAN - committed strain| (infinity norm), or "-". */
+static void strain_match(const double *statev, int nstatv, const double *stran, int ntens,
+                         char *buf, size_t len) {
+  if (nstatv < 8 || hash(statev, nstatv) == 0 || (ntens != 3 && ntens != 4 && ntens != 6)) {
+    snprintf(buf, len, "-");
+    return;
+  }
+  double stored[3], host[3] = {stran[0], stran[1], stran[ntens == 3 ? 2 : 3]}, worst = 0;
+  committed_strain(statev, stored);
+  for (int i = 0; i < 3; i++) {
+    double d = stored[i] > host[i] ? stored[i] - host[i] : host[i] - stored[i];
+    if (d > worst) worst = d;
+  }
+  snprintf(buf, len, "%.3e", worst);
+}
+
 __attribute__((destructor)) static void close_log(void) {
   if (out) fclose(out);
 }
@@ -89,6 +120,8 @@ void UMAT(double *stress, double *statev, double *ddsdde, double *sse, double *s
   int n = *ntens < MAX_NTENS ? *ntens : MAX_NTENS;
   int reset = reset_call(*kstep, *kinc, *noel);
   uint64_t entry = hash(statev, *nstatv);
+  char match[32];
+  strain_match(statev, *nstatv, stran, *ntens, match, sizeof match);
   /* The twin's inputs, copied before the call changes them. */
   double twin_stress[MAX_NTENS], twin_ddsdde[MAX_NTENS * MAX_NTENS], twin_pnewdt = *pnewdt;
   double *twin_statev = NULL;
@@ -123,7 +156,8 @@ void UMAT(double *stress, double *statev, double *ddsdde, double *sse, double *s
   }
   for (int i = 0; i < n; i++) k += snprintf(line + k, sizeof line - k, " %a", stran[i] + dstran[i]);
   for (int i = 0; i < n; i++) k += snprintf(line + k, sizeof line - k, " %a", stress[i]);
-  snprintf(line + k, sizeof line - k, " %016" PRIx64 " %s\n", hash(statev, *nstatv), twin);
+  snprintf(line + k, sizeof line - k, " %016" PRIx64 " %s %s\n", hash(statev, *nstatv), twin,
+           match);
   pthread_mutex_lock(&lock);
   if (!out) {
     const char *path = getenv("MESORVE_UMAT_LOG");

@@ -93,6 +93,53 @@ pub enum Error {
         unknowns: u64,
         history: u64,
     },
+    /// A state of another material: its fingerprint (the scene after `PROPS`, a Gmsh
+    /// file's content, the integration; see `model::fingerprint`) is not this model's.
+    #[error(
+        "state written by a material of fingerprint {stored:010x}, and this material's is \
+         {expected:010x}: another scene, other PROPS, another mesh file or another \
+         integration wrote it"
+    )]
+    StateOwner { stored: u64, expected: u64 },
+    /// A host's state whose committed strain is not the host's strain at the start of the
+    /// increment (`STRAN`): another point's state, a stale one, or an element re-added
+    /// with the state of its removal.
+    #[error(
+        "STATEV was committed at the strain {stored:?}, and STRAN (the strain at the start \
+         of this increment) is {host:?}, which differs by {difference:.3e} (tolerance \
+         {tolerance:.1e}): this is not the state of this point at this increment (another \
+         point's, or an older increment's){remedy}"
+    )]
+    StateStrain {
+        /// `[eps_xx, eps_yy, gamma_xy]` the state holds.
+        stored: [f64; 3],
+        /// The host's `STRAN`, in the same order.
+        host: [f64; 3],
+        difference: f64,
+        tolerance: f64,
+        /// What to check in the host, or "".
+        remedy: String,
+    },
+    /// A host's state committed at the end of another time than the start of this
+    /// increment (`TIME(2)`): a state of an earlier increment, such as an element re-added
+    /// with the state of its removal.
+    #[error(
+        "STATEV was committed at the end of the time {stored}, and this increment starts at \
+         TIME(2) = {host}: it is the state of another increment{remedy}"
+    )]
+    StateTime {
+        stored: f64,
+        host: f64,
+        /// What to check in the host, or "".
+        remedy: String,
+    },
+    /// An all-zero (virgin) state at a point whose strain is not zero: the host lost the
+    /// state, or zeroed it to restart the point (which a scene switch allows).
+    #[error(
+        "STATEV is all zeros (no state) but STRAN is {host:?}: the host did not carry this \
+         point's state{remedy}"
+    )]
+    StateLost { host: [f64; 3], remedy: String },
     /// A state could not be encoded (a bug).
     #[error("state encoding: {reason}")]
     StateEncoding { reason: String },

@@ -105,10 +105,11 @@ fn a_refused_load_changes_nothing() {
     let e = inst.load_state(&truncated).unwrap_err();
     assert!(matches!(e, Error::BadState { .. }), "{e}");
     let e = inst.load_state(&future).unwrap_err();
-    assert!(matches!(e, Error::StateVersion { found: 10, .. }), "{e}");
+    assert!(matches!(e, Error::StateVersion { found: 11, .. }), "{e}");
     assert_eq!(
         e.to_string(),
-        "state format version 10; this library reads versions [1, 2, 3, 4, 5, 6, 7, 8] and 9"
+        "state format version 11; this library reads versions [1, 2, 3, 4, 5, 6, 7, 8, 9] \
+         and 10"
     );
     let e = inst.load_state(&foreign).unwrap_err();
     assert!(matches!(e, Error::StateMismatch { .. }), "{e}");
@@ -224,6 +225,7 @@ fn a_state_with_points_held_against_their_gap_restarts_bit_identically() {
     let nh = u64::from_le_bytes(bytes[24..32].try_into().unwrap()) as usize;
     let held_bytes = 8 + 8 * nh.div_ceil(64);
     let mut format7 = bytes[..bytes.len() - 4 - held_bytes].to_vec();
+    format7.drain(40..48); // format 10's fingerprint
     format7[8..12].copy_from_slice(&7u32.to_le_bytes());
     let payload = (format7.len() - 40) as u64;
     format7[32..40].copy_from_slice(&payload.to_le_bytes());
@@ -236,4 +238,57 @@ fn a_state_with_points_held_against_their_gap_restarts_bit_identically() {
         .update(case.targets[k + 1], &mut ws, TangentRequest::Consistent)
         .unwrap();
     assert_ne!(bits(&r), bits(&responses[k + 1]), "the held status matters");
+}
+
+/// A checkpoint carries its model's fingerprint: loaded into a model of the same sizes but
+/// another meaning (the paper's RVE with `contact_shear = "cohesive"`, or integrated by
+/// IMPL-EX) it is refused with `StateOwner`, naming both fingerprints, and changes
+/// nothing; a model built again from the same scene (a restarted process) takes it.
+#[test]
+fn a_checkpoint_of_another_fingerprint_is_refused() {
+    let model = |text: &str| {
+        Arc::new(Model::from_scene(&rve::Scene::from_toml_str(text, ".").unwrap()).unwrap())
+    };
+    let paper = common::paper_scene_with(&[]);
+    let shear = common::paper_scene_with(&[(
+        "beta = 0.707,",
+        "beta = 0.707, contact_shear = \"cohesive\",",
+    )]);
+    let implex = common::paper_scene_with(&[("[solver]", "[solver]\nintegration = \"implex\"")]);
+    let source = model(&paper);
+    let mut ws = source.workspace();
+    let mut inst = Instance::new(source.clone());
+    inst.update([1.2e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+        .unwrap();
+    inst.commit().unwrap();
+    let bytes = inst.save_state().unwrap();
+    for (what, text) in [("cohesive shear", &shear), ("IMPL-EX", &implex)] {
+        let other = model(text);
+        assert_eq!(
+            other.unknowns(),
+            source.unknowns(),
+            "{what}: the same sizes"
+        );
+        let mut target = Instance::new(other.clone());
+        let before = target.committed().clone();
+        let e = target.load_state(&bytes).unwrap_err();
+        assert!(matches!(e, Error::StateOwner { .. }), "{what}: {e}");
+        let text = e.to_string();
+        assert!(
+            text.contains(&format!("{:010x}", source.fingerprint())),
+            "{text}"
+        );
+        assert!(
+            text.contains(&format!("{:010x}", other.fingerprint())),
+            "{text}"
+        );
+        assert_eq!(
+            target.committed(),
+            &before,
+            "{what}: a refused load changes nothing"
+        );
+    }
+    let mut again = Instance::new(model(&paper));
+    again.load_state(&bytes).unwrap();
+    assert_eq!(again.committed(), inst.committed());
 }

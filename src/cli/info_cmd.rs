@@ -43,6 +43,9 @@ struct Info {
     checkpoint_bytes: usize,
     /// `STATEV` entries that keep the committed core in the host (`*DEPVAR`).
     umat_nstatv: usize,
+    /// The fingerprint states of this scene carry (10 hex digits; the UMAT refuses a
+    /// state of another): the scene as parsed, a Gmsh file's content, the integration.
+    state_fingerprint: String,
 }
 
 pub fn run(args: &InfoArgs) -> Result<()> {
@@ -66,6 +69,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         instance_bytes,
         checkpoint_bytes,
         umat_nstatv: model.statev_len(),
+        state_fingerprint: format!("{:010x}", model.fingerprint()),
     };
     if args.json {
         println!(
@@ -89,7 +93,7 @@ fn loaded_instance_bytes(model: &Arc<Model>) -> Result<(usize, usize)> {
 }
 
 fn print_text(info: &Info) {
-    let rows: [(&str, String); 12] = [
+    let rows: [(&str, String); 13] = [
         ("scene", info.scene.clone()),
         (
             "analysis",
@@ -107,6 +111,7 @@ fn print_text(info: &Info) {
         ("instance bytes", info.instance_bytes.to_string()),
         ("checkpoint bytes", info.checkpoint_bytes.to_string()),
         ("umat_nstatv", info.umat_nstatv.to_string()),
+        ("state fingerprint", info.state_fingerprint.clone()),
     ];
     for (label, value) in rows {
         println!("{label:<24} {value}");

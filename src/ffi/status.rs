@@ -157,7 +157,10 @@ impl From<&Error> for RveStatus {
             Error::NoTrial => RveStatus::NoTrial,
             Error::BadState { .. } => RveStatus::BadState,
             Error::StateVersion { .. } => RveStatus::StateVersion,
-            Error::StateMismatch { .. } => RveStatus::StateMismatch,
+            Error::StateMismatch { .. } | Error::StateOwner { .. } => RveStatus::StateMismatch,
+            Error::StateStrain { .. } | Error::StateTime { .. } | Error::StateLost { .. } => {
+                RveStatus::BadState
+            }
             Error::HostConvention(_) => RveStatus::InvalidArgument,
             Error::Panic(_) => RveStatus::Panic,
             Error::Threads(_) => RveStatus::Internal,

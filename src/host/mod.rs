@@ -15,4 +15,7 @@ pub mod umat;
 
 pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};
 pub use material::{Material, SearchPath, SCENE_PATH_VAR};
-pub use umat::{global, Outcome, Umat, UmatCall, UmatFailure, UmatOutputs, UmatStats};
+pub use umat::{
+    global, strain_mismatch, Outcome, Umat, UmatCall, UmatFailure, UmatOutputs, UmatStats, MIRRORS,
+    STRAIN_MATCH_FLOOR, STRAIN_MATCH_RELATIVE, TABLE_MODE_MAX_NSTATV,
+};

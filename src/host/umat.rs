@@ -17,8 +17,15 @@
 //!   was rebuilt from, so the answer is a function of `STATEV`, the strain and `DTIME`
 //!   alone. `STATEV(umat_nstatv+1..+3)` receive the inspection mirrors below. A
 //!   `STATEV` that is not exactly what the library wrote (flipped bits, a changed,
-//!   zeroed or truncated entry, another model's state) fails the call with a message.
-//! - **Table mode** (a smaller `NSTATV`; printed once on stderr). The RVE state lives in
+//!   zeroed or truncated entry, another model's state) fails the call with a message, and
+//!   so does a valid state that is not this point's at this increment: written under
+//!   another fingerprint (scene after `PROPS`, Gmsh file, integration:
+//!   [`Error::StateOwner`]), committed at another strain than `STRAN` (another point's,
+//!   a stale one, an element re-added with its old state: [`Error::StateStrain`]), or all
+//!   zeros at a strained point (a lost state: [`Error::StateLost`]); the scene's
+//!   `[statev]` table relaxes the last two for hosts that need it.
+//! - **Table mode** (`NSTATV` up to [`TABLE_MODE_MAX_NSTATV`]; printed once on stderr;
+//!   an `NSTATV` between that and `umat_nstatv` is refused). The RVE state lives in
 //!   the process's table keyed by `(NOEL, NPT)`, and the increments are inferred from
 //!   `(KSTEP, KINC, TIME(2))` as described next. A restart, a second analysis or a
 //!   re-added element then does not carry the state; a point whose `KSTEP` or `TIME(2)`
@@ -75,6 +82,7 @@ use super::material::{Material, SearchPath};
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
+use crate::scene::ZeroAtStrain;
 use crate::solver::{Answer, Integration};
 use crate::state::statev;
 
@@ -229,8 +237,59 @@ impl Increment {
 
 /// Printed once per process: a table point restarted from virgin.
 static BACKWARDS_NOTE: std::sync::Once = std::sync::Once::new();
-/// Printed once per process: a virgin `STATEV` at a strained point.
-static VIRGIN_NOTE: std::sync::Once = std::sync::Once::new();
+/// Printed once per process: a `STATEV` of format 1, without fingerprint.
+static UNVERIFIED_NOTE: std::sync::Once = std::sync::Once::new();
+
+/// Refuses a state committed at the end of another time than this increment's start
+/// (`TIME(2)`, to [`TIME_ROUNDOFF`] of the time plus the increment): a state of an earlier
+/// increment, such as the one CalculiX 2.20 hands an element re-added by `*MODEL CHANGE`.
+fn check_start_time(p: &Point, c: &UmatCall, check: bool) -> crate::Result<()> {
+    let (Some(end), true) = (p.core_time, check) else {
+        return Ok(());
+    };
+    let start = c.time[1];
+    let tolerance = TIME_ROUNDOFF * (end.abs() + c.dtime.abs());
+    if (start - end).abs() <= tolerance {
+        return Ok(());
+    }
+    Err(Error::StateTime {
+        stored: end,
+        host: start,
+        remedy: EARLIER_STATE_REMEDY.into(),
+    })
+}
+
+/// `STRAN` and the state's committed strain agree when they differ by at most this
+/// fraction of the larger of the two (infinity norms) plus [`STRAIN_MATCH_FLOOR`]. A host
+/// that adds `DSTRAN` to `STRAN`, as Abaqus and CalculiX do, hands back the library's own
+/// sum (docs/statev.md has the agreement measured over a CalculiX analysis); a total
+/// strain recomputed from displacements differs by round-off; a state one increment old
+/// differs by the increment.
+pub const STRAIN_MATCH_RELATIVE: f64 = 1e-9;
+/// The absolute floor of the strain match (at zero strain), strain units.
+pub const STRAIN_MATCH_FLOOR: f64 = 1e-12;
+/// The inspection mirrors after the state (point id, iterations, sub-steps).
+pub const MIRRORS: usize = 3;
+/// `NSTATV` up to this keeps the state in the library's table (room for the mirrors).
+pub const TABLE_MODE_MAX_NSTATV: usize = MIRRORS;
+
+const STALE_STATE_REMEDY: &str = ". Check that the host hands every call of an increment \
+    the STATEV kept at the end of this point's previous converged increment, with that \
+    increment's total strain in STRAN (a state of another point, or of an earlier \
+    increment, is not this one's). A host whose STRAN is not the total strain at the start \
+    of the increment sets [statev] check_strain = false in the scene";
+const EARLIER_STATE_REMEDY: &str = ". CalculiX 2.20 hands an element re-added by *MODEL \
+    CHANGE, ADD the STATEV of its last call before the removal: such an element cannot \
+    continue from its old state (see docs/statev.md: do not remove and re-add RVE \
+    elements, or set [statev] check_time = false in the scene to continue the old state \
+    as ccx does). Otherwise the host handed a state kept from an earlier increment; a \
+    host whose TIME(2) is not the total time at the start of the increment sets [statev] \
+    check_time = false";
+const LOST_STATE_REMEDY: &str = ". CalculiX 2.20 writes STATEV to its restart file only \
+    when the model has a contact pair: add a node-to-surface pair that never closes (see \
+    docs/calculix.md) and run the analysis again from its start. A host that zeroes \
+    STATEV on purpose to restart the point from a virgin RVE (an element re-added with \
+    its state reset) sets [statev] zero_at_strain = \"virgin\" in the scene";
 /// Printed once per process: `NSTATV` too small for `STATEV` mode.
 static TABLE_NOTE: std::sync::Once = std::sync::Once::new();
 
@@ -256,6 +315,10 @@ struct Point {
     /// table mode and before the first call.
     core_values: Option<Vec<f64>>,
     trial_values: Option<Vec<f64>>,
+    /// `STATEV` mode: the host's time the committed state and the pending trial were
+    /// written at the end of (`statev::Core::time`).
+    core_time: Option<f64>,
+    trial_time: Option<f64>,
 }
 
 impl Point {
@@ -272,6 +335,8 @@ impl Point {
             failed: false,
             core_values: None,
             trial_values: None,
+            core_time: None,
+            trial_time: None,
         }
     }
 
@@ -447,7 +512,7 @@ impl Umat {
             material: Some(material.clone()),
         };
         let statev_len = material.model.statev_len();
-        let in_statev = out.statev.len() >= statev_len;
+        let in_statev = statev_mode(c, out.statev.len(), statev_len).map_err(with_material)?;
         let (committed, reverted) = if in_statev {
             (false, false)
         } else {
@@ -526,23 +591,42 @@ impl Umat {
             // IMPL-EX: the host kept the point's last trial, which is the state those values
             // expand to plus the step kept for carrying over (whose answers are the same
             // bit for bit): it is committed instead of rebuilt.
-            if !(implex && same(&p.trial_values) && p.instance.commit().is_ok()) {
-                let core = statev::read(statev, model.state_sizes(), model.interface_points())?;
-                if core.is_none() && c.stran.iter().any(|&e| e != 0.0) {
-                    virgin_note(c);
+            if implex && same(&p.trial_values) && p.instance.commit().is_ok() {
+                p.core_time = p.trial_time;
+            } else {
+                let stored = statev::read(
+                    statev,
+                    model.state_sizes(),
+                    model.interface_points(),
+                    model.fingerprint(),
+                )?;
+                if stored.as_ref().is_some_and(|s| !s.verified) {
+                    unverified_note(c);
                 }
+                let core = stored.map(|s| s.core);
+                p.core_time = core.as_ref().and_then(|c| c.time);
                 with_workspace(&model, |ws| p.instance.load_core(core.as_ref(), ws))?;
                 self.loads.fetch_add(1, Ordering::Relaxed);
             }
             p.core_values = Some(statev.to_vec());
         }
+        let virgin = statev.iter().all(|&v| v == 0.0);
+        check_start_strain(p, c, virgin)?;
         p.trial_values = None;
         let request = p.material.tangent;
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         })?;
         let mut written = vec![0.0; statev.len()];
-        statev::write(&p.instance.trial_core()?, model.state_sizes(), &mut written)?;
+        let mut core = p.instance.trial_core()?;
+        core.time = Some(c.time[1] + c.dtime);
+        p.trial_time = core.time;
+        statev::write(
+            &core,
+            model.state_sizes(),
+            model.fingerprint(),
+            &mut written,
+        )?;
         p.trial_values = Some(written);
         let solved = r.report.answer != Answer::Repeated;
         let counter = if solved { &self.solves } else { &self.repeats };
@@ -681,6 +765,8 @@ fn lock<'p>(point: &'p PointRef, c: &UmatCall) -> crate::Result<MutexGuard<'p, P
             p.failed = true;
             p.core_values = None;
             p.trial_values = None;
+            p.core_time = None;
+            p.trial_time = None;
             Ok(p)
         }
     }
@@ -694,17 +780,83 @@ fn call_strain(p: &Point, c: &UmatCall) -> crate::Result<[f64; 3]> {
     h.rve_strain(&total)
 }
 
-/// Says once per process that a point with a strain at the start of its increment came
-/// with a virgin `STATEV`: the host did not carry the state (a CalculiX 2.20 restart
-/// without a contact pair, an element re-added with its strain).
-fn virgin_note(c: &UmatCall) {
-    warn_once(&VIRGIN_NOTE, || {
+/// Says once per process that a point's `STATEV` is of state format 1 (no fingerprint):
+/// accepted, since an upgrade may find an analysis mid-way, but it cannot be verified to be
+/// this material's; the point's next write is verified.
+fn unverified_note(c: &UmatCall) {
+    warn_once(&UNVERIFIED_NOTE, || {
         format!(
-            "mesorve: element {}, point {}: STATEV is all zeros (a virgin RVE) but STRAN is \
-             not: the host did not carry this point's state (printed once)",
-            c.noel, c.npt
+            "mesorve: element {}, point {}, material `{}`: STATEV written by an earlier \
+             mesorve (state format 1, no fingerprint): accepted, but it cannot be verified \
+             to be this material's state; the values written from now on can (printed \
+             once)",
+            c.noel,
+            c.npt,
+            trim(c.cmname)
         )
     });
+}
+
+/// `STATEV` mode (true) or table mode (false) for a call with `nstatv` entries when the
+/// state needs `needed`: `STATEV` mode from `needed` on, table mode up to
+/// [`TABLE_MODE_MAX_NSTATV`] (room for the mirrors only, the 0.1-0.3 decks' rule for the
+/// table), an error naming the count in between (a `*DEPVAR` short of the state, which
+/// would otherwise run in the table without a restart or a re-added element carrying it).
+fn statev_mode(c: &UmatCall, nstatv: usize, needed: usize) -> crate::Result<bool> {
+    if nstatv >= needed {
+        return Ok(true);
+    }
+    if nstatv <= TABLE_MODE_MAX_NSTATV {
+        return Ok(false);
+    }
+    Err(Error::HostConvention(format!(
+        "NSTATV = {nstatv}: material `{}` keeps its RVE state in STATEV(1:{needed}) (set \
+         *DEPVAR to {needed}, plus {MIRRORS} for the mirrors: `rve info`'s umat_nstatv); an \
+         NSTATV of at most {TABLE_MODE_MAX_NSTATV} keeps the state in the library's table \
+         instead",
+        trim(c.cmname)
+    )))
+}
+
+/// `Some((difference, tolerance))` when a state committed at `stored` does not belong to
+/// the start of an increment at `host` (infinity norms; see [`STRAIN_MATCH_RELATIVE`]).
+pub fn strain_mismatch(stored: [f64; 3], host: [f64; 3]) -> Option<(f64, f64)> {
+    let norm = |e: &[f64; 3]| e.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let difference = norm(&std::array::from_fn(|i| stored[i] - host[i]));
+    let tolerance = STRAIN_MATCH_RELATIVE * norm(&stored).max(norm(&host)) + STRAIN_MATCH_FLOOR;
+    (difference > tolerance).then_some((difference, tolerance))
+}
+
+/// Refuses a state that is not this point's at this increment: its committed strain must
+/// be the host's `STRAN` to [`STRAIN_MATCH_RELATIVE`] of the larger of the two, plus
+/// [`STRAIN_MATCH_FLOOR`]; an all-zero `STATEV` (`virgin`) at a strained point is a lost
+/// state unless the scene says the host zeroes it on purpose (`[statev]`).
+fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool) -> crate::Result<()> {
+    let spec = p.material.model.scene().spec.statev;
+    if !spec.check_strain {
+        return Ok(());
+    }
+    let host = c.hypothesis.rve_strain(c.stran)?;
+    let stored = p.instance.committed().strain;
+    let Some((difference, tolerance)) = strain_mismatch(stored, host) else {
+        return check_start_time(p, c, spec.check_time);
+    };
+    if virgin {
+        if spec.zero_at_strain == ZeroAtStrain::Virgin {
+            return Ok(());
+        }
+        return Err(Error::StateLost {
+            host,
+            remedy: LOST_STATE_REMEDY.into(),
+        });
+    }
+    Err(Error::StateStrain {
+        stored,
+        host,
+        difference,
+        tolerance,
+        remedy: STALE_STATE_REMEDY.into(),
+    })
 }
 
 /// Says once per process that `STATEV` is too short to hold the state.

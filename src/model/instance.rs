@@ -277,16 +277,18 @@ impl Instance {
     /// [`load_state`](Self::load_state) on an instance of the same scene, in this process
     /// or another, continues bit-identically.
     pub fn save_state(&self) -> Result<Vec<u8>> {
-        persist::encode(&self.committed, self.sizes())
+        persist::encode(&self.committed, self.sizes(), self.model.fingerprint)
     }
 
     /// Replaces the committed state by the one in `bytes` (from
     /// [`save_state`](Self::save_state), this format version or an older readable one) and
-    /// discards the trial. Refused with `BadState`, `StateVersion` or `StateMismatch` (a
-    /// model of another scene, or a history the model's interface law does not admit); a
+    /// discards the trial. Refused with `BadState`, `StateVersion`, `StateMismatch` (a
+    /// model of other sizes, or a history the model's interface law does not admit) or
+    /// `StateOwner` (another fingerprint: another scene, `PROPS`, mesh file or
+    /// integration; formats before 10 carry none and load unverified); a
     /// refused load changes nothing, the trial included.
     pub fn load_state(&mut self, bytes: &[u8]) -> Result<()> {
-        let state = persist::decode(bytes, self.sizes())?;
+        let state = persist::decode(bytes, self.sizes(), self.model.fingerprint)?;
         if let Some(law) = &self.model.disc.law {
             if !law.history_is_valid(&state.history) {
                 return Err(Error::BadState {

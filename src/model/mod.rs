@@ -5,6 +5,7 @@
 
 pub mod batch;
 pub mod cache;
+mod fingerprint;
 mod from_scene;
 mod instance;
 mod microstructure;

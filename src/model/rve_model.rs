@@ -4,6 +4,7 @@
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use super::fingerprint::scene_fingerprint;
 use super::from_scene::interface_law;
 use super::microstructure::build_microstructure;
 use crate::assembly::{Discretization, DiscretizationSpec};
@@ -51,6 +52,9 @@ pub struct Model {
     pub(crate) elastic_s_zz_tangent: [f64; 3],
     /// `-K_el^-1 G` of the virgin RVE (n x 3): the solver's predictor.
     pub(crate) elastic_sensitivity: Vec<f64>,
+    /// What gives this model's states their meaning (`fingerprint`): states of another
+    /// fingerprint are refused.
+    pub(crate) fingerprint: u64,
 }
 
 impl std::fmt::Debug for Model {
@@ -106,6 +110,7 @@ impl Model {
             elastic_tangent: [0.0; 9],
             elastic_s_zz_tangent: [0.0; 3],
             elastic_sensitivity: Vec::new(),
+            fingerprint: scene_fingerprint(scene)?,
         };
         // The virgin tangent: one converged "update" at zero strain.
         let mut ws = model.workspace();
@@ -169,6 +174,13 @@ impl Model {
     /// Counts and quality figures of the mesh.
     pub fn mesh_stats(&self) -> MeshStats {
         MeshStats::of(&self.microstructure.mesh)
+    }
+
+    /// The fingerprint of what gives this model's states their meaning: the scene after a
+    /// host's `PROPS`, a Gmsh file's content, the integration (see `fingerprint`), a
+    /// number below 2^40 that `rve info` prints and the state refusals name.
+    pub fn fingerprint(&self) -> u64 {
+        self.fingerprint
     }
 
     /// How the interface history is integrated (`[solver] integration`).

@@ -60,6 +60,7 @@ impl Model {
             previous: state.implex.previous.clone(),
             step: state.implex.step,
             at_start: state.implex.at_start,
+            time: None,
         }
     }
 

@@ -14,7 +14,7 @@ pub use path::{path_points, MAX_STRAIN};
 pub use schema::{
     BoundaryKind, BoundarySpec, CellSpec, ContactStatusSpec, EffectsSpec, ElasticSpec,
     GeometrySpec, GmshSpec, IntegrationSpec, InterfaceQuadratureSpec, ItzSpec, LinearItzSpec,
-    MaterialsSpec, MeshSpec, PathSegment, PenaltySpec, SceneSpec, SolverSpec,
-    StraightInterfaceSpec,
+    MaterialsSpec, MeshSpec, PathSegment, PenaltySpec, SceneSpec, SolverSpec, StatevSpec,
+    StraightInterfaceSpec, ZeroAtStrain,
 };
 pub use validate::{MAX_PATH_INCREMENTS, MAX_TRIANGLES};

@@ -26,6 +26,8 @@ pub struct SceneSpec {
     pub boundary: BoundarySpec,
     #[serde(default)]
     pub solver: SolverSpec,
+    #[serde(default)]
+    pub statev: StatevSpec,
     /// Macro strain path for the command-line runner: piecewise linear segments.
     #[serde(default)]
     pub path: Vec<PathSegment>,
@@ -216,6 +218,51 @@ pub struct BoundarySpec {
 /// `boundary.kind`: the boundary condition itself, its snake_case name the scene's value
 /// (`taylor`, `linear`, `periodic` (default), `minimal`).
 pub type BoundaryKind = BoundaryCondition;
+
+/// `[statev]`: what the UMAT accepts as the state a host hands over in `STATEV` (see
+/// `host::umat` and docs/statev.md). A host protocol, not physics: it is not part of a
+/// state's fingerprint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StatevSpec {
+    /// Refuse a state whose committed strain differs from the host's `STRAN` (the total
+    /// strain at the start of the increment) beyond round-off: `true` (default). `false`
+    /// for a host that passes no `STRAN` or a strain of another meaning.
+    #[serde(default = "yes")]
+    pub check_strain: bool,
+    /// Refuse a state committed at the end of another time than the increment's start
+    /// (`TIME(2)`, the total time): `true` (default). `false` for a host whose `TIME(2)` is
+    /// not the total time at the start of the increment.
+    #[serde(default = "yes")]
+    pub check_time: bool,
+    /// An all-zero `STATEV` at a point whose `STRAN` is not zero.
+    #[serde(default)]
+    pub zero_at_strain: ZeroAtStrain,
+}
+
+impl Default for StatevSpec {
+    fn default() -> Self {
+        StatevSpec {
+            check_strain: true,
+            check_time: true,
+            zero_at_strain: ZeroAtStrain::Refuse,
+        }
+    }
+}
+
+/// `statev.zero_at_strain`: what an all-zero `STATEV` at a strained point means.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ZeroAtStrain {
+    /// The host lost the state (CalculiX 2.20 restarting a model without a contact pair):
+    /// the call is refused.
+    #[default]
+    Refuse,
+    /// The host zeroed the state to restart the point from a virgin RVE (an element
+    /// re-added by a host that resets its state variables): answered as a virgin RVE at
+    /// the host's strain.
+    Virgin,
+}
 
 /// `[solver]`: the solver's own settings, by their names (see `solver::Settings`).
 pub type SolverSpec = Settings;

@@ -9,8 +9,9 @@
 //!     16     8  number of unknowns of the model (u64 LE)
 //!     24     8  number of interface history points of the model (u64 LE)
 //!     32     8  payload length in bytes (u64 LE), without the checksum
-//!     40     .  payload: bincode of `State`
-//!   40+len   4  CRC-32C (Castagnoli) of every byte before it (u32 LE); formats >= 6
+//!     40     8  the model's fingerprint (u64 LE, `Model::fingerprint`); formats >= 10
+//!      H     .  payload: bincode of `State` (H = 48 from format 10, 40 before)
+//!    H+len   4  CRC-32C (Castagnoli) of every byte before it (u32 LE); formats >= 6
 //! ```
 //! A reader refuses another magic or a buffer shorter than the header
 //! ([`Error::BadState`]). Unless the version is one of the old formats 1-5, which carry
@@ -21,7 +22,9 @@
 //! refused by the payload length, which leaves the checksum out. Then it refuses an
 //! unknown format version ([`Error::StateVersion`]: a later format adds a decoder here,
 //! keeps the trailing checksum and keeps reading the old ones), and a model of other
-//! sizes ([`Error::StateMismatch`]).
+//! sizes ([`Error::StateMismatch`]) or, from format 10, of another fingerprint
+//! ([`Error::StateOwner`]: another scene, other `PROPS`, another mesh file or integration).
+//! Formats before 10 carry no fingerprint: they load as before, unverified.
 //!
 //! | format | library | payload history |
 //! |---|---|---|
@@ -33,7 +36,8 @@
 //! | 6 | 0.2.0 | format 5 plus the trailing CRC-32C (read, kept; no fast-path data: the next update solves) |
 //! | 7 | main after 0.2.0 | format 6 plus the fast path's `LinearBranch` (read, kept; no point held against its gap) |
 //! | 8 | main after 0.2.0 | format 7 plus the points held at a contact status their gap contradicts, a bitset ([`State::held_contact`]) (read, kept; no IMPL-EX history) |
-//! | 9 | 0.3.0 | format 8 plus IMPL-EX's previous history, step and contact status (`ImplexHistory`), empty with implicit integration (written) |
+//! | 9 | 0.3.0 | format 8 plus IMPL-EX's previous history, step and contact status (`ImplexHistory`), empty with implicit integration (read, not verified against the model's fingerprint) |
+//! | 10 | main after 0.3.0 | format 9 with the model's fingerprint in the header (written) |
 //!
 //! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
 //! model, so this module depends on the state alone; `model::Instance::save_state` and
@@ -47,14 +51,19 @@ use crate::error::{Error, Result};
 
 const MAGIC: &[u8; 8] = b"MESORVE\0";
 /// Version of the state byte format written; bump when the layout or `State` changes.
-pub const STATE_FORMAT_VERSION: u32 = 9;
+pub const STATE_FORMAT_VERSION: u32 = 10;
 /// Older formats this library still reads without a checksum.
 pub const READABLE_OLD_FORMATS: [u32; 5] = [1, 2, 3, 4, 5];
 /// Older formats this library still reads, with the trailing checksum.
-pub const READABLE_CHECKED_FORMATS: [u32; 3] = [6, 7, 8];
+pub const READABLE_CHECKED_FORMATS: [u32; 4] = [6, 7, 8, 9];
 /// Every older format this library reads.
-const READABLE_FORMATS: [u32; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
+const READABLE_FORMATS: [u32; 9] = [1, 2, 3, 4, 5, 6, 7, 8, 9];
+/// Header bytes of the formats before 10.
 const HEADER: usize = 40;
+/// Header bytes from format 10: the fingerprint follows.
+const FINGERPRINTED_HEADER: usize = 48;
+/// The first format with the fingerprint.
+const FIRST_FINGERPRINTED: u32 = 10;
 /// Bytes of the trailing CRC-32C.
 const CHECKSUM: usize = 4;
 
@@ -71,19 +80,21 @@ pub struct StateSizes {
 /// Bytes [`encode`] writes for `state`.
 pub fn encoded_len(state: &State) -> Result<usize> {
     let payload = bincode::serialized_size(state).map_err(encoding)?;
-    Ok(HEADER + payload as usize + CHECKSUM)
+    Ok(FINGERPRINTED_HEADER + payload as usize + CHECKSUM)
 }
 
-/// Encodes `state`, a state of a model of `sizes`, in the current format.
-pub fn encode(state: &State, sizes: StateSizes) -> Result<Vec<u8>> {
+/// Encodes `state`, a state of a model of `sizes` and `fingerprint`, in the current
+/// format.
+pub fn encode(state: &State, sizes: StateSizes, fingerprint: u64) -> Result<Vec<u8>> {
     let payload = bincode::serialize(state).map_err(encoding)?;
-    let mut out = Vec::with_capacity(HEADER + payload.len() + CHECKSUM);
+    let mut out = Vec::with_capacity(FINGERPRINTED_HEADER + payload.len() + CHECKSUM);
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&STATE_FORMAT_VERSION.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
     out.extend_from_slice(&(sizes.unknowns as u64).to_le_bytes());
     out.extend_from_slice(&(sizes.history as u64).to_le_bytes());
     out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&fingerprint.to_le_bytes());
     out.extend_from_slice(&payload);
     let checksum = crc32c::crc32c(&out);
     out.extend_from_slice(&checksum.to_le_bytes());
@@ -91,9 +102,9 @@ pub fn encode(state: &State, sizes: StateSizes) -> Result<Vec<u8>> {
 }
 
 /// Decodes bytes written by [`encode`] (this format or an older readable one) for a
-/// model of `sizes`, and checks that the state is usable: sizes, finite values, a
-/// non-negative history.
-pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
+/// model of `sizes` and `fingerprint`, and checks that the state is usable: sizes, the
+/// fingerprint (formats from 10), finite values, a non-negative history.
+pub fn decode(bytes: &[u8], sizes: StateSizes, fingerprint: u64) -> Result<State> {
     if bytes.len() < HEADER {
         return Err(bad(format!(
             "{} bytes, shorter than the {HEADER}-byte header",
@@ -129,14 +140,25 @@ pub fn decode(bytes: &[u8], sizes: StateSizes) -> Result<State> {
             history: mnh,
         });
     }
+    let header = if version >= FIRST_FINGERPRINTED {
+        FINGERPRINTED_HEADER
+    } else {
+        HEADER
+    };
     let len = u64_at(bytes, 32);
-    if len != (bytes.len() - HEADER) as u64 {
+    if bytes.len() < header || len != (bytes.len() - header) as u64 {
         return Err(bad(format!(
             "payload of {} bytes, header says {len}",
-            bytes.len() - HEADER
+            bytes.len().saturating_sub(header)
         )));
     }
-    let state = payload(version, &bytes[HEADER..])?;
+    if version >= FIRST_FINGERPRINTED && u64_at(bytes, HEADER) != fingerprint {
+        return Err(Error::StateOwner {
+            stored: u64_at(bytes, HEADER),
+            expected: fingerprint,
+        });
+    }
+    let state = payload(version, &bytes[header..])?;
     // A valid sensitivity or curvature must have its buffers; empty ones are fine.
     let filled_if_valid = |valid: bool, values: &[i8]| !valid || !values.is_empty();
     if state.unknowns.len() as u64 != n
@@ -368,6 +390,7 @@ mod tests {
         unknowns: 7,
         history: 5,
     };
+    const FP: u64 = 0x12_3456_789A;
 
     fn state() -> State {
         let mut s = State::virgin(SIZES.unknowns, SIZES.history);
@@ -386,9 +409,9 @@ mod tests {
     #[test]
     fn round_trip() {
         let s = state();
-        let bytes = encode(&s, SIZES).unwrap();
+        let bytes = encode(&s, SIZES, FP).unwrap();
         assert_eq!(bytes.len(), encoded_len(&s).unwrap());
-        assert_eq!(decode(&bytes, SIZES).unwrap(), s);
+        assert_eq!(decode(&bytes, SIZES, FP).unwrap(), s);
     }
 
     /// Format 6 (0.2.0: format 7 without the fast-path data) loads, with no fast-path
@@ -412,19 +435,19 @@ mod tests {
             curvature: &s.curvature,
         })
         .unwrap();
-        let mut bytes = encode(&s, SIZES).unwrap();
+        let mut bytes = encode(&s, SIZES, FP).unwrap();
         bytes.truncate(HEADER);
         bytes[8..12].copy_from_slice(&6u32.to_le_bytes());
         bytes[32..40].copy_from_slice(&(payload.len() as u64).to_le_bytes());
         bytes.extend_from_slice(&payload);
         let sum = crc32c::crc32c(&bytes);
         bytes.extend_from_slice(&sum.to_le_bytes());
-        let loaded = decode(&bytes, SIZES).unwrap();
+        let loaded = decode(&bytes, SIZES, FP).unwrap();
         assert_eq!(loaded, s, "the same state, no fast-path data");
         assert!(!loaded.linear.valid);
         let last = bytes.len() - 1;
         bytes[last] ^= 1;
-        assert!(matches!(decode(&bytes, SIZES), Err(Error::BadState { .. })));
+        assert!(matches!(decode(&bytes, SIZES, FP), Err(Error::BadState { .. })));
     }
 
     /// Format 7 (format 8 without the held contact status) loads with no point held, and
@@ -433,18 +456,36 @@ mod tests {
     fn format_7_loads_with_no_point_held() {
         let mut s = state();
         s.held_contact[0] = 0b101;
-        let bytes = encode(&s, SIZES).unwrap();
-        let decoded = decode(&bytes, SIZES).unwrap();
+        let bytes = encode(&s, SIZES, FP).unwrap();
+        let decoded = decode(&bytes, SIZES, FP).unwrap();
         assert_eq!(decoded, s);
         assert!(decoded.is_held(0) && !decoded.is_held(1) && decoded.is_held(2));
         // Format 7: the same payload less the bitset (its u64 length and one word) and
         // the empty IMPL-EX history.
         let held = 8 + 8 * s.held_contact.len();
         let old = older_format(&bytes, 7, held + EMPTY_IMPLEX);
-        let loaded = decode(&old, SIZES).unwrap();
+        let loaded = decode(&old, SIZES, FP).unwrap();
         assert!(loaded.held_contact.iter().all(|&w| w == 0));
         s.held_contact.fill(0);
         assert_eq!(loaded, s, "the same state, no point held");
+    }
+
+    /// Format 9 (0.3.0: no fingerprint) loads unverified; format 10 of another
+    /// fingerprint is refused, naming both.
+    #[test]
+    fn fingerprint_is_checked_from_format_10() {
+        let s = state();
+        let bytes = encode(&s, SIZES, FP).unwrap();
+        match decode(&bytes, SIZES, FP + 1) {
+            Err(e @ Error::StateOwner { .. }) => {
+                let text = e.to_string();
+                assert!(text.contains(&format!("{FP:010x}")), "{text}");
+                assert!(text.contains(&format!("{:010x}", FP + 1)), "{text}");
+            }
+            r => panic!("{r:?}"),
+        }
+        let format9 = older_format(&bytes, 9, 0);
+        assert_eq!(decode(&format9, SIZES, FP + 1).unwrap(), s);
     }
 
     /// Bytes of an empty [`ImplexHistory`](crate::state::ImplexHistory): two empty
@@ -455,6 +496,7 @@ mod tests {
     /// last `strip` bytes, with a new header and checksum.
     fn older_format(bytes: &[u8], version: u32, strip: usize) -> Vec<u8> {
         let mut old = bytes[..bytes.len() - CHECKSUM - strip].to_vec();
+        old.drain(HEADER..FINGERPRINTED_HEADER);
         old[8..12].copy_from_slice(&version.to_le_bytes());
         let payload = (old.len() - HEADER) as u64;
         old[32..40].copy_from_slice(&payload.to_le_bytes());
@@ -469,14 +511,14 @@ mod tests {
     fn format_8_loads_without_implex_history() {
         let mut s = state();
         s.held_contact[0] = 0b10;
-        let plain = encode(&s, SIZES).unwrap();
-        let loaded = decode(&older_format(&plain, 8, EMPTY_IMPLEX), SIZES).unwrap();
+        let plain = encode(&s, SIZES, FP).unwrap();
+        let loaded = decode(&older_format(&plain, 8, EMPTY_IMPLEX), SIZES, FP).unwrap();
         assert_eq!(loaded, s);
         s.implex.previous = vec![1e-5; SIZES.history];
         s.implex.step = 0.25;
         s.implex.closed = vec![0b1001];
-        let bytes = encode(&s, SIZES).unwrap();
-        let decoded = decode(&bytes, SIZES).unwrap();
+        let bytes = encode(&s, SIZES, FP).unwrap();
+        let decoded = decode(&bytes, SIZES, FP).unwrap();
         assert_eq!(decoded, s);
         assert!(decoded.implex.is_closed(0) && !decoded.implex.is_closed(1));
         assert!(decoded.implex.is_consistent(SIZES.history, SIZES.history));
@@ -492,42 +534,42 @@ mod tests {
         s.linear.jumps = (0..12).map(|i| i as f32 * 0.5).collect();
         s.linear.closed = vec![true, false];
         s.linear.unknowns_strain = [1e-4, 0.0, 0.0];
-        let bytes = encode(&s, SIZES).unwrap();
-        assert_eq!(decode(&bytes, SIZES).unwrap(), s);
+        let bytes = encode(&s, SIZES, FP).unwrap();
+        assert_eq!(decode(&bytes, SIZES, FP).unwrap(), s);
         s.linear.jumps.pop();
-        let bytes = encode(&s, SIZES).unwrap();
-        assert!(matches!(decode(&bytes, SIZES), Err(Error::BadState { .. })));
+        let bytes = encode(&s, SIZES, FP).unwrap();
+        assert!(matches!(decode(&bytes, SIZES, FP), Err(Error::BadState { .. })));
         s.linear.jumps.push(f32::NAN);
-        let bytes = encode(&s, SIZES).unwrap();
-        assert!(matches!(decode(&bytes, SIZES), Err(Error::BadState { .. })));
+        let bytes = encode(&s, SIZES, FP).unwrap();
+        assert!(matches!(decode(&bytes, SIZES, FP), Err(Error::BadState { .. })));
     }
 
     /// Each refusal is its own typed error, naming what it found.
     #[test]
     fn refusals_are_typed() {
-        let bytes = encode(&state(), SIZES).unwrap();
+        let bytes = encode(&state(), SIZES, FP).unwrap();
         assert!(matches!(
-            decode(&bytes[..39], SIZES),
+            decode(&bytes[..39], SIZES, FP),
             Err(Error::BadState { .. })
         ));
         assert!(matches!(
-            decode(&bytes[..bytes.len() - 1], SIZES),
+            decode(&bytes[..bytes.len() - 1], SIZES, FP),
             Err(Error::BadState { .. })
         ));
         let mut other = bytes.clone();
         other[0] = b'X';
-        assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
+        assert!(matches!(decode(&other, SIZES, FP), Err(Error::BadState { .. })));
         // A later format with its checksum is StateVersion; a changed version without
         // a new checksum is corruption.
         let later = STATE_FORMAT_VERSION + 1;
         let mut other = bytes.clone();
         other[8..12].copy_from_slice(&later.to_le_bytes());
-        assert!(matches!(decode(&other, SIZES), Err(Error::BadState { .. })));
+        assert!(matches!(decode(&other, SIZES, FP), Err(Error::BadState { .. })));
         let body = other.len() - CHECKSUM;
         let sum = crc32c::crc32c(&other[..body]);
         other[body..].copy_from_slice(&sum.to_le_bytes());
         assert!(matches!(
-            decode(&other, SIZES),
+            decode(&other, SIZES, FP),
             Err(Error::StateVersion {
                 found,
                 current: STATE_FORMAT_VERSION,
@@ -539,7 +581,7 @@ mod tests {
             let mut flipped = bytes.clone();
             flipped[bit / 8] ^= 1 << (bit % 8);
             assert!(
-                matches!(decode(&flipped, SIZES), Err(Error::BadState { .. })),
+                matches!(decode(&flipped, SIZES, FP), Err(Error::BadState { .. })),
                 "bit {bit}"
             );
         }
@@ -547,7 +589,7 @@ mod tests {
             unknowns: 8,
             ..SIZES
         };
-        let err = decode(&bytes, bigger).unwrap_err();
+        let err = decode(&bytes, bigger, FP).unwrap_err();
         assert!(matches!(
             err,
             Error::StateMismatch {
@@ -564,15 +606,15 @@ mod tests {
         );
         // A header of matching sizes over a payload of other sizes.
         let small = State::virgin(3, 5);
-        let lying = encode(&small, SIZES).unwrap();
-        let err = decode(&lying, SIZES).unwrap_err();
+        let lying = encode(&small, SIZES, FP).unwrap();
+        let err = decode(&lying, SIZES, FP).unwrap_err();
         assert_eq!(
             err.to_string(),
             "state bytes: payload sizes disagree with the header"
         );
         let mut infinite = state();
         infinite.history[0] = f64::INFINITY;
-        let err = decode(&encode(&infinite, SIZES).unwrap(), SIZES).unwrap_err();
+        let err = decode(&encode(&infinite, SIZES, FP).unwrap(), SIZES, FP).unwrap_err();
         assert!(matches!(err, Error::BadState { .. }), "{err}");
     }
 }

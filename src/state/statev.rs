@@ -3,7 +3,8 @@
 //!
 //! **What the core holds** ([`Core`]): the macro strain, the interface history
 //! (`delta_max` per point for the paper's law, eq. 25), the contact status of every
-//! interface point, and what IMPL-EX needs for its next extrapolation (`h_{n-1}`, `dt_n`).
+//! interface point, what IMPL-EX needs for its next extrapolation (`h_{n-1}`, `dt_n`), and
+//! the host's time at the end of the increment that committed it.
 //! Nothing else: the fluctuation, the predictor's sensitivity, the path curvature and the
 //! fast path's data are caches the library rebuilds or keeps per process
 //! (`Model::expand_core`), so that the state a host stores stays a few hundred values.
@@ -15,19 +16,28 @@
 //! as doubles would form NaNs and denormals that registers and printers do not keep.
 //!
 //! ```text
-//! entry  value
+//! entry  value (format 2)
 //!     0  tag: STATEV_TAG * 2^16 + format version (CORE_FORMAT_VERSION)
-//!     1  payload bytes L
+//!     1  payload bytes L + 2^24 * (fingerprint mod 2^24)
 //!     2  model sizes: unknowns * 2^24 + history values
-//!     3  CRC-32C of the little-endian u64s of entries 0-2 and of the payload bytes
+//!     3  CRC-32C + 2^32 * (fingerprint div 2^24); the CRC of the little-endian u64s of
+//!        entries 0-2, of the fingerprint's high part and of the payload bytes
 //!   4..  the payload, 6 bytes per entry (little-endian, the last one zero-padded):
 //!        bincode 1 of `Core`
 //!  rest  zeros, up to the count the model needs (`values_needed`)
 //! ```
+//! The fingerprint ([`FINGERPRINT_BITS`] bits, `model::fingerprint`) names what the values
+//! mean: the scene after `PROPS`, a Gmsh file's content, the integration. It sits in the
+//! spare bits of the header. Format 1 (the first STATEV format, on main after 0.3.0 and
+//! never released) is the same without the fingerprint (entry 1 = L, entry 3 = the CRC of
+//! entries 0-2 and the payload) and with a core without the time (`CoreV1`): it is still
+//! read, as a state that cannot be verified ([`Stored::verified`] false).
+//!
 //! All zeros is the virgin state (hosts initialize `STATEV` to zero). Any other content
 //! that is not exactly what [`write`] writes for some core of this model is refused by
 //! [`read`] with [`Error::BadState`] saying what is wrong; the checksum catches flipped
-//! bits and overwritten entries, the length and trailing zeros catch truncation.
+//! bits and overwritten entries, the length and trailing zeros catch truncation. A state
+//! of another fingerprint is [`Error::StateOwner`].
 
 use serde::{Deserialize, Serialize};
 
@@ -37,8 +47,14 @@ use crate::error::{Error, Result};
 
 /// "MESV" in ASCII, the tag's high 32 bits.
 const STATEV_TAG: u64 = 0x4D45_5356;
-/// Version of the core layout; bump when [`Core`] changes.
-pub const CORE_FORMAT_VERSION: u64 = 1;
+/// Version of the core layout; bump when [`Core`] or the header changes.
+pub const CORE_FORMAT_VERSION: u64 = 2;
+/// The first format (main after 0.3.0, unreleased): no fingerprint, read as unverified.
+const UNVERIFIED_FORMAT: u64 = 1;
+/// Bits of a state's fingerprint: 24 in entry 1, 16 in entry 3.
+pub const FINGERPRINT_BITS: u32 = 40;
+/// Payload bytes are below 2^24 (entry 1's low bits).
+const PAYLOAD_LIMIT: usize = 1 << 24;
 /// Entries before the payload.
 const HEADER: usize = 4;
 /// Payload bytes per entry.
@@ -62,6 +78,35 @@ pub struct Core {
     pub step: f64,
     /// IMPL-EX: the step that led here froze the history it started from.
     pub at_start: bool,
+    /// The host's total time at the end of the increment that committed this state
+    /// (`TIME(2) + DTIME` of the UMAT call that wrote it), when the host gives a time: the
+    /// next increment must start there (a state of an earlier increment is refused).
+    pub time: Option<f64>,
+}
+
+/// The core of format 1: [`Core`] without the host's time.
+#[derive(Serialize, Deserialize)]
+struct CoreV1 {
+    strain: [f64; 3],
+    history: Vec<f64>,
+    closed: Vec<u64>,
+    previous: Vec<f64>,
+    step: f64,
+    at_start: bool,
+}
+
+impl From<CoreV1> for Core {
+    fn from(c: CoreV1) -> Self {
+        Core {
+            strain: c.strain,
+            history: c.history,
+            closed: c.closed,
+            previous: c.previous,
+            step: c.step,
+            at_start: c.at_start,
+            time: None,
+        }
+    }
 }
 
 impl Core {
@@ -82,6 +127,7 @@ impl Core {
             && (self.previous.is_empty() || self.previous.len() == sizes.history)
             && self.step.is_finite()
             && self.step >= 0.0
+            && self.time.is_none_or(f64::is_finite)
             && self
                 .strain
                 .iter()
@@ -98,6 +144,7 @@ pub fn values_needed(sizes: StateSizes, points: usize, implex: bool) -> usize {
         history: vec![0.0; sizes.history],
         closed: vec![0; held_contact_words(points)],
         previous: vec![0.0; if implex { sizes.history } else { 0 }],
+        time: Some(0.0),
         ..Core::default()
     };
     HEADER + payload_len(&largest).div_ceil(BYTES_PER_VALUE)
@@ -107,12 +154,29 @@ fn payload_len(core: &Core) -> usize {
     bincode::serialized_size(core).expect("a core always serializes") as usize
 }
 
-/// Writes `core` of a model of `sizes` into `out` (zeros after it). Fails, writing
-/// nothing, when `out` is too short.
-pub fn write(core: &Core, sizes: StateSizes, out: &mut [f64]) -> Result<()> {
+/// A core [`read`] found, and whether its fingerprint was checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stored {
+    pub core: Core,
+    /// False for a format 1 state, which carries no fingerprint.
+    pub verified: bool,
+}
+
+/// Writes `core` of a model of `sizes` and `fingerprint` into `out` (zeros after it).
+/// Fails, writing nothing, when `out` is too short.
+pub fn write(core: &Core, sizes: StateSizes, fingerprint: u64, out: &mut [f64]) -> Result<()> {
     let payload = bincode::serialize(core).map_err(|e| Error::StateEncoding {
         reason: e.to_string(),
     })?;
+    if payload.len() >= PAYLOAD_LIMIT || fingerprint >> FINGERPRINT_BITS != 0 {
+        return Err(Error::StateEncoding {
+            reason: format!(
+                "a state core of {} bytes (at most {PAYLOAD_LIMIT}) or a fingerprint of more \
+                 than {FINGERPRINT_BITS} bits",
+                payload.len()
+            ),
+        });
+    }
     let used = HEADER + payload.len().div_ceil(BYTES_PER_VALUE);
     if out.len() < used {
         return Err(Error::BadState {
@@ -123,12 +187,19 @@ pub fn write(core: &Core, sizes: StateSizes, out: &mut [f64]) -> Result<()> {
             ),
         });
     }
-    let header = header(payload.len(), sizes);
+    let header = Header {
+        format: CORE_FORMAT_VERSION,
+        payload_len: payload.len(),
+        sizes: sizes_entry(sizes),
+        fingerprint: Some(fingerprint),
+        crc: 0,
+    };
+    let mut entries = header.entries();
+    entries[3] += u64::from(header.checksum(&payload));
     out.fill(0.0);
-    for (o, h) in out.iter_mut().zip(header) {
-        *o = h as f64;
+    for (o, e) in out.iter_mut().zip(entries) {
+        *o = e as f64;
     }
-    out[3] = f64::from(checksum(&header[..3], &payload));
     for (o, chunk) in out[HEADER..]
         .iter_mut()
         .zip(payload.chunks(BYTES_PER_VALUE))
@@ -140,9 +211,16 @@ pub fn write(core: &Core, sizes: StateSizes, out: &mut [f64]) -> Result<()> {
     Ok(())
 }
 
-/// The core `values` hold for a model of `sizes` with `points` interface points: `None`
-/// for all zeros (virgin), else the core [`write`] wrote, or [`Error::BadState`].
-pub fn read(values: &[f64], sizes: StateSizes, points: usize) -> Result<Option<Core>> {
+/// The core `values` hold for a model of `sizes` with `points` interface points and
+/// `fingerprint`: `None` for all zeros (virgin), else the core [`write`] wrote, or
+/// [`Error::BadState`], [`Error::StateMismatch`] (other sizes) or [`Error::StateOwner`]
+/// (another fingerprint).
+pub fn read(
+    values: &[f64],
+    sizes: StateSizes,
+    points: usize,
+    fingerprint: u64,
+) -> Result<Option<Stored>> {
     if values.iter().all(|&v| v == 0.0) {
         return Ok(None);
     }
@@ -161,9 +239,8 @@ pub fn read(values: &[f64], sizes: StateSizes, points: usize) -> Result<Option<C
         return Err(bad(format!("only {} STATEV entries", values.len())));
     }
     let entries: Vec<u64> = values.iter().map(|&v| v as u64).collect();
-    check_header(&entries, sizes)?;
-    let len = entries[1] as usize;
-    let used = HEADER + len.div_ceil(BYTES_PER_VALUE);
+    let header = Header::parse(&entries)?;
+    let used = HEADER + header.payload_len.div_ceil(BYTES_PER_VALUE);
     if used > entries.len() {
         return Err(bad(format!(
             "STATEV has {} entries, its header says the state takes {used} (truncated, or \
@@ -171,49 +248,124 @@ pub fn read(values: &[f64], sizes: StateSizes, points: usize) -> Result<Option<C
             entries.len()
         )));
     }
-    let payload = unpack(&entries[HEADER..used], len)?;
+    let payload = unpack(&entries[HEADER..used], header.payload_len)?;
     if let Some(k) = (used..entries.len()).find(|&k| entries[k] != 0) {
         return Err(bad(format!(
             "STATEV({}) is not zero after the state's {used} entries",
             k + 1
         )));
     }
-    if checksum(&entries[..3], &payload) as u64 != entries[3] {
+    if header.checksum(&payload) != header.crc {
         return Err(bad(
             "STATEV checksum mismatch: the state values were changed or truncated",
         ));
     }
-    let core: Core = bincode::deserialize(&payload)
-        .map_err(|e| bad(format!("STATEV payload does not decode ({e})")))?;
+    header.check_owner(sizes, fingerprint)?;
+    let undecodable = |e: bincode::Error| bad(format!("STATEV payload does not decode ({e})"));
+    let core: Core = if header.fingerprint.is_some() {
+        bincode::deserialize(&payload).map_err(undecodable)?
+    } else {
+        bincode::deserialize::<CoreV1>(&payload)
+            .map_err(undecodable)?
+            .into()
+    };
     if !core.fits(sizes, points) {
         return Err(bad(
             "STATEV state of another size than the model's, or not finite",
         ));
     }
-    Ok(Some(core))
+    Ok(Some(Stored {
+        core,
+        verified: header.fingerprint.is_some(),
+    }))
 }
 
-/// Checks the tag, the format and the model sizes of the header entries.
-fn check_header(entries: &[u64], sizes: StateSizes) -> Result<()> {
-    if entries[0] >> 16 != STATEV_TAG {
-        return Err(bad("STATEV(1) is not a mesorve state tag"));
+/// The four header entries, decoded.
+struct Header {
+    format: u64,
+    payload_len: usize,
+    /// Entry 2: unknowns * 2^24 + history values.
+    sizes: u64,
+    /// `None` in format 1.
+    fingerprint: Option<u64>,
+    crc: u32,
+}
+
+impl Header {
+    /// Decodes and checks the tag and the format.
+    fn parse(entries: &[u64]) -> Result<Self> {
+        if entries[0] >> 16 != STATEV_TAG {
+            return Err(bad("STATEV(1) is not a mesorve state tag"));
+        }
+        let format = entries[0] & 0xFFFF;
+        let crc = (entries[3] & 0xFFFF_FFFF) as u32;
+        let (payload_len, fingerprint) = match format {
+            CORE_FORMAT_VERSION => (
+                (entries[1] % PAYLOAD_LIMIT as u64) as usize,
+                Some((entries[1] >> 24) | (entries[3] >> 32) << 24),
+            ),
+            UNVERIFIED_FORMAT if entries[3] >> 32 == 0 => (entries[1] as usize, None),
+            _ => {
+                return Err(bad(format!(
+                    "STATEV state format {format}, this library reads {UNVERIFIED_FORMAT} \
+                     and {CORE_FORMAT_VERSION}"
+                )))
+            }
+        };
+        Ok(Header {
+            format,
+            payload_len,
+            sizes: entries[2],
+            fingerprint,
+            crc,
+        })
     }
-    let format = entries[0] & 0xFFFF;
-    if format != CORE_FORMAT_VERSION {
-        return Err(bad(format!(
-            "STATEV state format {format}, this library reads {CORE_FORMAT_VERSION}"
-        )));
+
+    /// The entries, with 0 for the CRC.
+    fn entries(&self) -> [u64; 4] {
+        let fp = self.fingerprint.unwrap_or(0);
+        [
+            (STATEV_TAG << 16) | self.format,
+            self.payload_len as u64 | (fp % (1 << 24)) << 24,
+            self.sizes,
+            (fp >> 24) << 32,
+        ]
     }
-    let expected = header(0, sizes)[2];
-    if entries[2] != expected {
-        return Err(Error::StateMismatch {
-            saved_unknowns: entries[2] >> 24,
-            saved_history: entries[2] & 0xFF_FFFF,
-            unknowns: sizes.unknowns as u64,
-            history: sizes.history as u64,
-        });
+
+    /// The CRC-32C of entries 0-2, of the fingerprint's high part (format 2) and of the
+    /// payload.
+    fn checksum(&self, payload: &[u8]) -> u32 {
+        let entries = self.entries();
+        let mut bytes: Vec<u8> = entries[..3].iter().flat_map(|h| h.to_le_bytes()).collect();
+        if self.fingerprint.is_some() {
+            bytes.extend_from_slice(&(entries[3] >> 32).to_le_bytes());
+        }
+        bytes.extend_from_slice(payload);
+        crc32c::crc32c(&bytes)
     }
-    Ok(())
+
+    /// Refuses a state of a model of other sizes or of another fingerprint.
+    fn check_owner(&self, sizes: StateSizes, fingerprint: u64) -> Result<()> {
+        if self.sizes != sizes_entry(sizes) {
+            return Err(Error::StateMismatch {
+                saved_unknowns: self.sizes >> 24,
+                saved_history: self.sizes & 0xFF_FFFF,
+                unknowns: sizes.unknowns as u64,
+                history: sizes.history as u64,
+            });
+        }
+        match self.fingerprint {
+            Some(stored) if stored != fingerprint => Err(Error::StateOwner {
+                stored,
+                expected: fingerprint,
+            }),
+            _ => Ok(()),
+        }
+    }
+}
+
+fn sizes_entry(sizes: StateSizes) -> u64 {
+    ((sizes.unknowns as u64) << 24) | sizes.history as u64
 }
 
 /// The payload bytes of `len` bytes packed in `entries`, which must be exactly enough.
@@ -237,21 +389,6 @@ fn unpack(entries: &[u64], len: usize) -> Result<Vec<u8>> {
     Ok(payload)
 }
 
-fn header(payload_len: usize, sizes: StateSizes) -> [u64; 4] {
-    [
-        (STATEV_TAG << 16) | CORE_FORMAT_VERSION,
-        payload_len as u64,
-        ((sizes.unknowns as u64) << 24) | sizes.history as u64,
-        0,
-    ]
-}
-
-fn checksum(header: &[u64], payload: &[u8]) -> u32 {
-    let mut bytes: Vec<u8> = header.iter().flat_map(|h| h.to_le_bytes()).collect();
-    bytes.extend_from_slice(payload);
-    crc32c::crc32c(&bytes)
-}
-
 fn bad(reason: impl Into<String>) -> Error {
     Error::BadState {
         reason: reason.into(),
@@ -266,6 +403,8 @@ mod tests {
         unknowns: 722,
         history: 192,
     };
+    /// A fingerprint with bits set in both of its parts.
+    const FP: u64 = 0xA5_1234_5678;
 
     fn core() -> Core {
         let mut closed = vec![0u64; 3];
@@ -277,6 +416,7 @@ mod tests {
             previous: (0..192).map(|i| 1e-7 * f64::from(i)).collect(),
             step: 0.125,
             at_start: true,
+            time: Some(1.25),
         }
     }
 
@@ -284,37 +424,37 @@ mod tests {
     fn round_trip_through_text() {
         let n = values_needed(SIZES, 192, true);
         let mut values = vec![0.0; n + 3];
-        write(&core(), SIZES, &mut values).unwrap();
+        write(&core(), SIZES, FP, &mut values).unwrap();
         // As a text restart file would hold them.
         let text: Vec<String> = values.iter().map(|v| format!("{v:e}")).collect();
         let back: Vec<f64> = text.iter().map(|t| t.parse().unwrap()).collect();
-        assert_eq!(read(&back, SIZES, 192).unwrap(), Some(core()));
-        assert_eq!(read(&vec![0.0; n], SIZES, 192).unwrap(), None);
+        assert_eq!(read(&back, SIZES, 192, FP).unwrap(), Some(Stored { core: core(), verified: true }));
+        assert_eq!(read(&vec![0.0; n], SIZES, 192, FP).unwrap(), None);
     }
 
     #[test]
     fn every_single_change_is_refused() {
         let n = values_needed(SIZES, 192, true);
         let mut values = vec![0.0; n];
-        write(&core(), SIZES, &mut values).unwrap();
+        write(&core(), SIZES, FP, &mut values).unwrap();
         for k in 0..n {
             for change in [1.0, 2f64.powi(40), 0.5, -1.0] {
                 let mut corrupted = values.clone();
                 corrupted[k] += change;
                 assert!(
-                    read(&corrupted, SIZES, 192).is_err(),
+                    read(&corrupted, SIZES, 192, FP).is_err(),
                     "entry {k} + {change}"
                 );
             }
             let mut zeroed = values.clone();
             if zeroed[k] != 0.0 {
                 zeroed[k] = 0.0;
-                assert!(read(&zeroed, SIZES, 192).is_err(), "entry {k} zeroed");
+                assert!(read(&zeroed, SIZES, 192, FP).is_err(), "entry {k} zeroed");
             }
         }
         for short in [n - 1, n / 2, 3] {
             assert!(
-                read(&values[..short], SIZES, 192).is_err(),
+                read(&values[..short], SIZES, 192, FP).is_err(),
                 "{short} entries"
             );
         }
@@ -323,7 +463,7 @@ mod tests {
             ..SIZES
         };
         assert!(matches!(
-            read(&values, other, 192),
+            read(&values, other, 192, FP),
             Err(Error::StateMismatch { .. })
         ));
     }
@@ -336,8 +476,66 @@ mod tests {
             ..core()
         };
         let mut values = vec![0.0; n];
-        write(&implicit, SIZES, &mut values).unwrap();
+        write(&implicit, SIZES, FP, &mut values).unwrap();
         implicit.previous = vec![0.0; 192];
-        assert!(write(&implicit, SIZES, &mut values).is_err());
+        assert!(write(&implicit, SIZES, FP, &mut values).is_err());
+    }
+
+    #[test]
+    fn another_fingerprint_is_refused_and_names_both() {
+        let mut values = vec![0.0; values_needed(SIZES, 192, true)];
+        write(&core(), SIZES, FP, &mut values).unwrap();
+        for other in [FP ^ 1, FP ^ (1 << 30), 1] {
+            match read(&values, SIZES, 192, other) {
+                Err(Error::StateOwner { stored, expected }) => {
+                    assert_eq!((stored, expected), (FP, other));
+                }
+                r => panic!("fingerprint {other:#x}: {r:?}"),
+            }
+        }
+    }
+
+    /// Values as format 1 had them (the same layout without the fingerprint, the core
+    /// without the time).
+    fn format1(core: &Core) -> Vec<f64> {
+        let payload = bincode::serialize(&CoreV1 {
+            strain: core.strain,
+            history: core.history.clone(),
+            closed: core.closed.clone(),
+            previous: core.previous.clone(),
+            step: core.step,
+            at_start: core.at_start,
+        })
+        .unwrap();
+        let header = Header {
+            format: UNVERIFIED_FORMAT,
+            payload_len: payload.len(),
+            sizes: sizes_entry(SIZES),
+            fingerprint: None,
+            crc: 0,
+        };
+        let mut entries = header.entries().to_vec();
+        entries[3] = u64::from(header.checksum(&payload));
+        entries.extend(payload.chunks(BYTES_PER_VALUE).map(|c| {
+            let mut bytes = [0u8; 8];
+            bytes[..c.len()].copy_from_slice(c);
+            u64::from_le_bytes(bytes)
+        }));
+        entries.resize(values_needed(SIZES, 192, true), 0);
+        entries.into_iter().map(|e| e as f64).collect()
+    }
+
+    #[test]
+    fn format_1_is_read_unverified() {
+        let old = format1(&core());
+        let stored = read(&old, SIZES, 192, FP).unwrap().unwrap();
+        let untimed = Core {
+            time: None,
+            ..core()
+        };
+        assert_eq!(stored, Stored { core: untimed, verified: false });
+        let mut changed = old.clone();
+        changed[10] += 1.0;
+        assert!(read(&changed, SIZES, 192, FP).is_err());
     }
 }
