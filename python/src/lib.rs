@@ -122,6 +122,9 @@ impl Model {
     }
 }
 
+/// What `Points.update` returns: the stresses and, unless not requested, the tangents.
+type Update<'py> = (Bound<'py, PyArray2<f64>>, Option<Bound<'py, PyArray3<f64>>>);
+
 /// `n` material points of one model, updated together (trial), then committed or reverted.
 #[pyclass(module = "mesorve._mesorve")]
 struct Points {
@@ -195,7 +198,7 @@ impl Points {
         eps: PyArrayLike2<'py, f64, AllowTypeChange>,
         dtime: f64,
         tangent: &str,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Option<Bound<'py, PyArray3<f64>>>)> {
+    ) -> PyResult<Update<'py>> {
         let request = tangent_request(tangent)?;
         let n = self.instances.len();
         let eps = eps.as_array();
