@@ -1,6 +1,6 @@
 ! rve.f90 -- Fortran 2008 interface of mesorve: module `rve`, with a bind(C) interface for
-! every function of include/rve.h, its constants, the `rve_info` type, and thin
-! convenience wrappers (suffix `_f`). Hand-written beside the generated header;
+! every function of include/rve.h, its constants, the `rve_info` and `rve_point_report`
+! types, and thin convenience wrappers (suffix `_f`). Hand-written beside the generated header;
 ! scripts/test-fortran fails when the two disagree (names, argument lists, value or
 ! reference, const-ness, widths, struct layout, constant values).
 !
@@ -16,7 +16,7 @@
 !   stress  = [s_xx, s_yy, s_xy], in the scene's units.
 ! - TANGENT. The C function writes 9 doubles row-major: tangent[3*i + j] = d s_i / d e_j
 !   (0-based). Received as `real(c_double) :: d(3,3)` (column-major), the raw interfaces
-!   below (rve_update, rve_update_ex, rve_update_batch) give
+!   below (rve_update, rve_update_ex, rve_update_batch*) give
 !         d(j, i) = d s_i / d e_j,   i.e. d = TRANSPOSE of the Jacobian
 !   (equal only when the tangent is symmetric: do not rely on it; the consistent tangent
 !   need not be symmetric, and on the paper's cycle its transpose differs in the last
@@ -121,8 +121,21 @@ module rve
     real(c_double) :: s_zz                    ! out-of-plane stress (plane strain; else 0)
   end type rve_info
 
+  ! RvePointReport: per-point report of rve_update_batch_timed, field for field.
+  type, bind(c), public :: rve_point_report
+    integer(c_int32_t) :: status              ! uint32_t: this point's RVE_STATUS_* value
+    integer(c_int32_t) :: iterations          ! uint32_t: as rve_info
+    integer(c_int32_t) :: substeps            ! uint32_t: as rve_info
+    integer(c_int32_t) :: factorizations      ! uint32_t: as rve_info
+    integer(c_int32_t) :: reliability         ! an RVE_RELIABILITY_* value
+    integer(c_int32_t) :: shared_from         ! uint32_t: 0 (answer sharing: not yet)
+    real(c_double) :: suggested_step_ratio    ! < 1: redo smaller; 1 otherwise
+    real(c_double) :: error_estimate          ! 0 (no error estimate yet)
+    real(c_double) :: s_zz                    ! as rve_info
+  end type rve_point_report
+
   ! ---- bind(C) interfaces: one per function of include/rve.h, in the header's order ----
-  public :: rve_update_batch, rve_last_error, rve_init, rve_init_file, rve_init_text, &
+  public :: rve_update_batch, rve_update_batch_timed, rve_last_error, rve_init, rve_init_file, rve_init_text, &
       rve_clone_model, rve_update_ex, rve_update_timed, rve_update, rve_commit, rve_revert, rve_reset, &
       rve_free, rve_fast_updates, rve_state_size, rve_state_save, rve_state_load, rve_write_vtk, rve_path_len, &
       rve_path_point, rve_model_builds, rve_status_message, rve_umat, rve_version, &
@@ -146,6 +159,29 @@ module rve
       integer(c_size_t), value, intent(in) :: nthreads
       integer(c_int32_t) :: status
     end function rve_update_batch
+
+    ! rve_update_batch over a host time increment dtime (as rve_update_timed), with a
+    ! report per point: reports(k) and messages((k-1)*message_len+1 : k*message_len), the
+    ! failure's message of point k, NUL-terminated, truncated ("" after a success). C
+    ! accepts NULL for both: here pass a dummy report and a one-character buffer with
+    ! message_len = 0 (nothing written).
+    function rve_update_batch_timed(handles, n, strains, dtime, stresses, tangents, &
+        tangent_request, reports, messages, message_len, nthreads) &
+        bind(c, name="rve_update_batch_timed") result(status)
+      import :: c_int64_t, c_size_t, c_double, c_int32_t, c_char, rve_point_report
+      integer(c_int64_t), intent(in) :: handles(*)
+      integer(c_size_t), value, intent(in) :: n
+      real(c_double), intent(in) :: strains(3, *)
+      real(c_double), value, intent(in) :: dtime
+      real(c_double), intent(inout) :: stresses(3, *)
+      real(c_double), intent(inout) :: tangents(3, 3, *)
+      integer(c_int32_t), value, intent(in) :: tangent_request
+      type(rve_point_report), intent(inout) :: reports(*)
+      character(kind=c_char), intent(inout) :: messages(*)
+      integer(c_size_t), value, intent(in) :: message_len
+      integer(c_size_t), value, intent(in) :: nthreads
+      integer(c_int32_t) :: status
+    end function rve_update_batch_timed
 
     ! Copies the last error message of this thread into buf(1:len), NUL-terminated when
     ! len > 0; returns the full length without the NUL (len = 0: only the length).

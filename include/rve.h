@@ -110,6 +110,31 @@ typedef enum RveReliability {
 // process that created them only (save the state bytes to move an instance).
 typedef int64_t RveHandle;
 
+// Per-point report of `rve_update_batch_timed`.
+typedef struct RvePointReport {
+  // This point's `RveStatus` (`OK`, `SOLVER_FAILED`, ...).
+  uint32_t status;
+  // Newton corrections, summed over sub-steps (as `RveInfo`).
+  uint32_t iterations;
+  // Accepted sub-steps (as `RveInfo`).
+  uint32_t substeps;
+  // Numeric factorizations of the RVE stiffness (as `RveInfo`).
+  uint32_t factorizations;
+  // An `RveReliability` value.
+  int32_t reliability;
+  // 0: this point was solved itself; `k + 1`: its answer was taken from point `k` of
+  // this batch, corrected to first order. Always 0 in this version.
+  uint32_t shared_from;
+  // < 1: redo the increment smaller; > 1: the next may be larger; 1 otherwise (on a
+  // failure: the solver's suggestion, 1 for a failure a smaller step does not mend).
+  double suggested_step_ratio;
+  // The integration error estimate relative to the step tolerance (0 when none is
+  // estimated; always 0 in this version).
+  double error_estimate;
+  // Out-of-plane stress `s_zz` (as `RveInfo`).
+  double s_zz;
+} RvePointReport;
+
 // Extra outputs of `rve_update_ex`.
 typedef struct RveInfo {
   // Newton corrections, summed over sub-steps.
@@ -158,6 +183,41 @@ uint32_t rve_update_batch(const RveHandle *handles,
                           uint32_t *statuses,
                           int32_t tangent_request,
                           size_t nthreads);
+
+// Trial-updates `n` distinct instances over one host time increment `dtime` (as
+// `rve_update_timed`): `rve_update_batch` with `dtime` and a report per point.
+//
+// - `reports`: `n` entries or NULL. Entry `k` receives point `k`'s status, its
+//   iterations, sub-steps, factorizations, reliability, `suggested_step_ratio` and
+//   `s_zz` (as `RveInfo`); `shared_from` and `error_estimate` are 0 in this version.
+// - `messages`: `n` buffers of `message_len` bytes each, point `k`'s at
+//   `messages + k * message_len`: its failure's message, NUL-terminated and truncated
+//   to `message_len - 1` bytes, or "" for a point that succeeded; or NULL (then
+//   `message_len` is ignored). Nothing is written when `message_len` is 0.
+//
+// Each point's stress and tangent are written only when it succeeded. `nthreads` and
+// the handles as `rve_update_batch`; the results do not depend on `nthreads` (bit for
+// bit) and equal `rve_update_timed` of each point (bit for bit).
+//
+// Returns `OK`, `BATCH_FAILED` (at least one point failed; the first one's message,
+// prefixed with its index, is the thread's last error), or `NULL_ARGUMENT`,
+// `INVALID_ARGUMENT` (tangent request, non-finite `dtime`) or `PANIC` when nothing was
+// run (then neither `reports` nor `messages` is written).
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size (strings:
+// NUL-terminated) for the duration of the call.
+uint32_t rve_update_batch_timed(const RveHandle *handles,
+                                size_t n,
+                                const double *strains,
+                                double dtime,
+                                double *stresses,
+                                double *tangents,
+                                int32_t tangent_request,
+                                struct RvePointReport *reports,
+                                char *messages,
+                                size_t message_len,
+                                size_t nthreads);
 
 // Copies the detailed message of the last failed `rve_*` call on the calling thread
 // into `buf` (at most `len` bytes, always NUL-terminated when `len > 0`, truncated if

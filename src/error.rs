@@ -153,6 +153,12 @@ pub enum Error {
         name: String,
         searched: Vec<PathBuf>,
     },
+    /// A point of a batch panicked (a bug); the other points are unaffected.
+    #[error("internal error (panic: {0}); please report it")]
+    Panic(String),
+    /// A batch's thread pool could not be started.
+    #[error("thread pool: {0}")]
+    Threads(String),
 }
 
 impl Error {

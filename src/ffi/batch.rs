@@ -1,51 +1,160 @@
-//! The batch entry point: many instances updated in parallel with rayon, for hosts that
-//! have no threads of their own.
+//! The batch entry points: many instances updated in parallel with rayon, for hosts that
+//! have no threads of their own. A translation over [`crate::model::batch`], the safe
+//! batch API.
 
-use std::collections::HashMap;
-use std::sync::{Arc, LazyLock, Mutex};
+use std::ffi::c_char;
 
-use rayon::prelude::*;
-
-use super::boundary::{guard, slice, slice_mut, Failure, FfiResult};
-use super::instance::{update_entry, RveHandle, RveTangentRequest};
+use super::boundary::{copy_message, guard, slice, slice_mut, Failure, FfiResult};
+use super::instance::{update_entry, RveHandle, RveReliability, RveTangentRequest};
 use super::registry;
 use super::status::RveStatus;
+use crate::model::batch::{
+    update_batch, BatchOutputs, BatchPoint, BatchStep, Failures, PointReport,
+};
+use crate::model::Response;
+use crate::solver::TangentRequest;
 
-static POOLS: LazyLock<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>> =
-    LazyLock::new(|| Mutex::new(HashMap::new()));
-
-/// A pool of `n` threads, built once per size and kept for the process.
-fn pool(n: usize) -> FfiResult<Arc<rayon::ThreadPool>> {
-    let mut pools = POOLS.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some(p) = pools.get(&n) {
-        return Ok(p.clone());
-    }
-    let p = rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .thread_name(|i| format!("rve-batch-{i}"))
-        .build()
-        .map_err(|e| Failure::new(RveStatus::Internal, format!("thread pool: {e}")))?;
-    let p = Arc::new(p);
-    pools.insert(n, p.clone());
-    Ok(p)
+/// Per-point report of `rve_update_batch_timed`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RvePointReport {
+    /// This point's `RveStatus` (`OK`, `SOLVER_FAILED`, ...).
+    pub status: u32,
+    /// Newton corrections, summed over sub-steps (as `RveInfo`).
+    pub iterations: u32,
+    /// Accepted sub-steps (as `RveInfo`).
+    pub substeps: u32,
+    /// Numeric factorizations of the RVE stiffness (as `RveInfo`).
+    pub factorizations: u32,
+    /// An `RveReliability` value.
+    pub reliability: i32,
+    /// 0: this point was solved itself; `k + 1`: its answer was taken from point `k` of
+    /// this batch, corrected to first order. Always 0 in this version.
+    pub shared_from: u32,
+    /// < 1: redo the increment smaller; > 1: the next may be larger; 1 otherwise (on a
+    /// failure: the solver's suggestion, 1 for a failure a smaller step does not mend).
+    pub suggested_step_ratio: f64,
+    /// The integration error estimate relative to the step tolerance (0 when none is
+    /// estimated; always 0 in this version).
+    pub error_estimate: f64,
+    /// Out-of-plane stress `s_zz` (as `RveInfo`).
+    pub s_zz: f64,
 }
 
-/// One item: the status and, on success, the outputs.
-fn one(
-    handle: RveHandle,
-    strain: &[f64],
-    stress: &mut [f64],
-    tangent: Option<&mut [f64]>,
-    request: RveTangentRequest,
-) -> Result<(), Failure> {
-    let entry = registry::get(handle)?;
-    let strain: [f64; 3] = strain.try_into().expect("chunks of 3");
-    let r = update_entry(&entry, strain, 0.0, request)?;
-    stress.copy_from_slice(&r.stress);
-    if let Some(t) = tangent {
-        t.copy_from_slice(&r.tangent);
+impl RvePointReport {
+    fn new(r: &PointReport, status: RveStatus) -> Self {
+        RvePointReport {
+            status: status as u32,
+            iterations: r.iterations,
+            substeps: r.substeps,
+            factorizations: r.factorizations,
+            reliability: RveReliability::from(r.reliability) as i32,
+            shared_from: r
+                .shared_from
+                .map_or(0, |k| u32::try_from(k + 1).unwrap_or(u32::MAX)),
+            suggested_step_ratio: r.suggested_step_ratio,
+            error_estimate: r.error_estimate,
+            s_zz: r.s_zz,
+        }
     }
-    Ok(())
+}
+
+/// A batch point named by a handle: looked up and locked when its turn comes.
+struct HandlePoint(RveHandle);
+
+impl BatchPoint for HandlePoint {
+    type Error = Failure;
+    fn update_point(
+        &mut self,
+        strain: [f64; 3],
+        dtime: f64,
+        request: TangentRequest,
+    ) -> FfiResult<Response> {
+        let entry = registry::get(self.0)?;
+        update_entry(&entry, strain, dtime, request)
+    }
+}
+
+/// The checked arguments of a batch call.
+struct Batch<'a> {
+    points: Vec<HandlePoint>,
+    strains: &'a [[f64; 3]],
+    stresses: &'a mut [[f64; 3]],
+    tangents: Option<&'a mut [[f64; 9]]>,
+    step: BatchStep,
+}
+
+/// Checks the arguments common to both batch entries.
+///
+/// # Safety
+/// As the entries: each non-NULL pointer points to memory of the documented size.
+unsafe fn checked<'a>(
+    handles: *const RveHandle,
+    n: usize,
+    strains: *const f64,
+    stresses: *mut f64,
+    tangents: *mut f64,
+    (dtime, tangent_request, threads): (f64, i32, usize),
+) -> FfiResult<Batch<'a>> {
+    let request = RveTangentRequest::from_i32(tangent_request)?;
+    if !dtime.is_finite() {
+        return Err(Failure::new(
+            RveStatus::InvalidArgument,
+            format!("dtime {dtime} is not finite"),
+        ));
+    }
+    let handles = slice(handles, n, "handles")?;
+    let tangents = if request == RveTangentRequest::None {
+        None
+    } else {
+        Some(slice_mut(tangents.cast::<[f64; 9]>(), n, "tangents")?)
+    };
+    Ok(Batch {
+        points: handles.iter().map(|&h| HandlePoint(h)).collect(),
+        strains: slice(strains.cast::<[f64; 3]>(), n, "strains")?,
+        stresses: slice_mut(stresses.cast::<[f64; 3]>(), n, "stresses")?,
+        tangents,
+        step: BatchStep {
+            dtime,
+            request: request.into(),
+            threads,
+        },
+    })
+}
+
+impl Batch<'_> {
+    /// Runs the batch; each point's status and report, and the failures in index order.
+    fn run(mut self) -> FfiResult<(Vec<PointReport>, Failures<Failure>)> {
+        let mut reports = vec![PointReport::default(); self.points.len()];
+        let out = BatchOutputs {
+            stresses: self.stresses,
+            tangents: self.tangents,
+            reports: &mut reports,
+        };
+        let failures = update_batch(&mut self.points, self.strains, self.step, out)?;
+        Ok((reports, failures))
+    }
+}
+
+/// `BATCH_FAILED` with the first failed point's message (prefixed with its index), if any
+/// failed.
+fn outcome(failures: &[(usize, Failure)]) -> FfiResult<()> {
+    match failures.first() {
+        None => Ok(()),
+        Some((k, f)) => Err(Failure::new(
+            RveStatus::BatchFailed,
+            format!("item {k}: {}", f.message),
+        )),
+    }
+}
+
+/// Each point's status: `OK` but for the failures.
+fn statuses(n: usize, failures: &[(usize, Failure)]) -> Vec<RveStatus> {
+    let mut s = vec![RveStatus::Ok; n];
+    for (k, f) in failures {
+        s[*k] = f.status;
+    }
+    s
 }
 
 /// Trial-updates `n` distinct instances: item `k` is `rve_update(handles[k],
@@ -79,129 +188,89 @@ pub unsafe extern "C" fn rve_update_batch(
     nthreads: usize,
 ) -> u32 {
     guard("rve_update_batch", || {
-        let request = request_of(tangent_request)?;
-        let too_long = || Failure::new(RveStatus::InvalidArgument, format!("n = {n} too large"));
-        let n3 = n.checked_mul(3).ok_or_else(too_long)?;
-        let n9 = n.checked_mul(9).ok_or_else(too_long)?;
-        if n == 0 {
-            return Ok(());
+        let args = (0.0, tangent_request, nthreads);
+        let batch = checked(handles, n, strains, stresses, tangents, args)?;
+        let out = slice_mut(statuses, n, "statuses")?;
+        let (_, failures) = batch.run()?;
+        for (o, s) in out.iter_mut().zip(self::statuses(n, &failures)) {
+            *o = s as u32;
         }
-        let items = Items {
-            handles: slice(handles, n, "handles")?,
-            strains: slice(strains, n3, "strains")?,
-            request,
-        };
-        let stresses = slice_mut(stresses, n3, "stresses")?;
-        let statuses = slice_mut(statuses, n, "statuses")?;
-        let tangents = if request == RveTangentRequest::None {
-            None
-        } else {
-            Some(slice_mut(tangents, n9, "tangents")?)
-        };
-        let results = items.run_all(stresses, tangents, nthreads)?;
-        report(&results, statuses)
+        outcome(&failures)
     }) as u32
 }
 
-/// The `tangent_request` argument of [`rve_update_batch`].
-fn request_of(tangent_request: i32) -> FfiResult<RveTangentRequest> {
-    match tangent_request {
-        0 => Ok(RveTangentRequest::Consistent),
-        1 => Ok(RveTangentRequest::None),
-        2 => Ok(RveTangentRequest::Elastic),
-        v => Err(Failure::new(
-            RveStatus::InvalidArgument,
-            format!("tangent_request {v} is not an RveTangentRequest"),
-        )),
-    }
-}
-
-/// The inputs of a batch: item `k` updates `handles[k]` to `strains[3k..3k + 3]`.
-struct Items<'a> {
-    handles: &'a [RveHandle],
-    strains: &'a [f64],
-    request: RveTangentRequest,
-}
-
-impl Items<'_> {
-    /// Item `k` into its outputs; a panic in it becomes its status.
-    fn run(
-        &self,
-        k: usize,
-        stress: &mut [f64],
-        tangent: Option<&mut [f64]>,
-    ) -> Result<(), Failure> {
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            one(
-                self.handles[k],
-                &self.strains[3 * k..3 * k + 3],
-                stress,
-                tangent,
-                self.request,
-            )
-        }))
-        .unwrap_or_else(|_| Err(Failure::new(RveStatus::Panic, "panic in batch item")))
-    }
-
-    /// Every item, on the calling thread (`nthreads` 1), rayon's global pool (0) or a
-    /// pool of `nthreads`, into the chunks of `stresses` and `tangents` (3 and 9 values
-    /// an item); the results in item order.
-    fn run_all(
-        &self,
-        stresses: &mut [f64],
-        mut tangents: Option<&mut [f64]>,
-        nthreads: usize,
-    ) -> FfiResult<Vec<Result<(), Failure>>> {
-        let mut results: Vec<Result<(), Failure>> = Vec::with_capacity(self.handles.len());
-        match nthreads {
-            1 => {
-                for (k, stress) in stresses.chunks_mut(3).enumerate() {
-                    let t = tangents.as_deref_mut().map(|t| &mut t[9 * k..9 * k + 9]);
-                    results.push(self.run(k, stress, t));
-                }
-            }
-            _ => {
-                let mut work = || {
-                    let stress_chunks = stresses.par_chunks_mut(3).enumerate();
-                    match tangents.as_deref_mut() {
-                        Some(t) => stress_chunks
-                            .zip(t.par_chunks_mut(9))
-                            .map(|((k, s), t)| self.run(k, s, Some(t)))
-                            .collect_into_vec(&mut results),
-                        None => stress_chunks
-                            .map(|(k, s)| self.run(k, s, None))
-                            .collect_into_vec(&mut results),
-                    }
-                };
-                if nthreads == 0 {
-                    work();
-                } else {
-                    pool(nthreads)?.install(work);
-                }
+/// Trial-updates `n` distinct instances over one host time increment `dtime` (as
+/// `rve_update_timed`): `rve_update_batch` with `dtime` and a report per point.
+///
+/// - `reports`: `n` entries or NULL. Entry `k` receives point `k`'s status, its
+///   iterations, sub-steps, factorizations, reliability, `suggested_step_ratio` and
+///   `s_zz` (as `RveInfo`); `shared_from` and `error_estimate` are 0 in this version.
+/// - `messages`: `n` buffers of `message_len` bytes each, point `k`'s at
+///   `messages + k * message_len`: its failure's message, NUL-terminated and truncated
+///   to `message_len - 1` bytes, or "" for a point that succeeded; or NULL (then
+///   `message_len` is ignored). Nothing is written when `message_len` is 0.
+///
+/// Each point's stress and tangent are written only when it succeeded. `nthreads` and
+/// the handles as `rve_update_batch`; the results do not depend on `nthreads` (bit for
+/// bit) and equal `rve_update_timed` of each point (bit for bit).
+///
+/// Returns `OK`, `BATCH_FAILED` (at least one point failed; the first one's message,
+/// prefixed with its index, is the thread's last error), or `NULL_ARGUMENT`,
+/// `INVALID_ARGUMENT` (tangent request, non-finite `dtime`) or `PANIC` when nothing was
+/// run (then neither `reports` nor `messages` is written).
+///
+/// # Safety
+/// Each non-NULL pointer must point to valid memory of the documented size (strings:
+/// NUL-terminated) for the duration of the call.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn rve_update_batch_timed(
+    handles: *const RveHandle,
+    n: usize,
+    strains: *const f64,
+    dtime: f64,
+    stresses: *mut f64,
+    tangents: *mut f64,
+    tangent_request: i32,
+    reports: *mut RvePointReport,
+    messages: *mut c_char,
+    message_len: usize,
+    nthreads: usize,
+) -> u32 {
+    guard("rve_update_batch_timed", || {
+        let args = (dtime, tangent_request, nthreads);
+        let batch = checked(handles, n, strains, stresses, tangents, args)?;
+        let message_bytes = n
+            .checked_mul(message_len)
+            .ok_or_else(|| Failure::new(RveStatus::InvalidArgument, "n * message_len overflows"))?;
+        let reports = (!reports.is_null())
+            .then(|| slice_mut(reports, n, "reports"))
+            .transpose()?;
+        let messages = (!messages.is_null() && message_len > 0)
+            .then(|| slice_mut(messages.cast::<u8>(), message_bytes, "messages"))
+            .transpose()?;
+        let (point_reports, failures) = batch.run()?;
+        let status = statuses(n, &failures);
+        if let Some(reports) = reports {
+            for ((out, r), s) in reports.iter_mut().zip(&point_reports).zip(&status) {
+                *out = RvePointReport::new(r, *s);
             }
         }
-        Ok(results)
-    }
+        if let Some(messages) = messages {
+            write_messages(messages, message_len, &failures);
+        }
+        outcome(&failures)
+    }) as u32
 }
 
-/// Writes each item's status into `statuses`; `BATCH_FAILED` with the first failed item's
-/// message (prefixed with its index) if any failed.
-fn report(results: &[Result<(), Failure>], statuses: &mut [u32]) -> FfiResult<()> {
-    let mut first = None;
-    for (k, (r, s)) in results.iter().zip(statuses.iter_mut()).enumerate() {
-        *s = match r {
-            Ok(()) => RveStatus::Ok as u32,
-            Err(f) => {
-                first.get_or_insert((k, f));
-                f.status as u32
-            }
-        };
+/// Writes "" to every point's message buffer, then each failure's message into its own.
+fn write_messages(messages: &mut [u8], message_len: usize, failures: &[(usize, Failure)]) {
+    for buf in messages.chunks_mut(message_len) {
+        buf[0] = 0;
     }
-    match first {
-        None => Ok(()),
-        Some((k, f)) => Err(Failure::new(
-            RveStatus::BatchFailed,
-            format!("item {k}: {}", f.message),
-        )),
+    for (k, f) in failures {
+        let buf = &mut messages[k * message_len..(k + 1) * message_len];
+        // SAFETY: `buf` is `message_len` writable bytes of the checked buffer.
+        unsafe { copy_message(&f.message, buf.as_mut_ptr(), message_len) };
     }
 }

@@ -7,6 +7,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use super::status::RveStatus;
 use crate::error::Error;
+use crate::model::batch::{panic_message, PointError};
 
 thread_local! {
     /// Detailed message of the last failed call on this thread ("" after a success).
@@ -41,13 +42,7 @@ impl Failure {
 
 impl From<Error> for Failure {
     fn from(e: Error) -> Self {
-        let step_ratio = match &e {
-            Error::Solve {
-                suggested_step_ratio,
-                ..
-            } => Some(*suggested_step_ratio),
-            _ => None,
-        };
+        let step_ratio = e.suggested_step_ratio();
         Failure {
             status: RveStatus::from(&e),
             message: e.to_string(),
@@ -84,11 +79,7 @@ pub(crate) fn guard(name: &str, f: impl FnOnce() -> FfiResult) -> RveStatus {
     let result = match catch_unwind(AssertUnwindSafe(f)) {
         Ok(r) => r,
         Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "non-string panic payload".into());
+            let what = panic_message(payload.as_ref());
             Err(Failure::new(
                 RveStatus::Panic,
                 format!("{name}: internal error (panic: {what}); please report it"),
@@ -160,4 +151,10 @@ pub unsafe extern "C" fn rve_last_error(buf: *mut std::ffi::c_char, len: usize) 
         LAST_ERROR.with(|m| copy_message(&m.borrow(), buf.cast(), len))
     }))
     .unwrap_or(0)
+}
+
+impl PointError for Failure {
+    fn suggested_step_ratio(&self) -> Option<f64> {
+        self.step_ratio
+    }
 }

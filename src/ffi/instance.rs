@@ -9,8 +9,8 @@ use std::sync::Arc;
 use super::boundary::{guard, out, slice, slice_mut, Failure, FfiResult};
 use super::registry::{self, Entry};
 use super::status::RveStatus;
+use crate::model::batch::{BatchPoint, PointReport, Reliability};
 use crate::model::cache;
-use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Model, Response};
 use crate::solver::TangentRequest;
 
@@ -37,7 +37,7 @@ pub enum RveTangentRequest {
 }
 
 impl RveTangentRequest {
-    fn from_i32(v: i32) -> FfiResult<Self> {
+    pub(crate) fn from_i32(v: i32) -> FfiResult<Self> {
         Ok(match v {
             0 => RveTangentRequest::Consistent,
             1 => RveTangentRequest::None,
@@ -87,30 +87,35 @@ pub struct RveInfo {
     pub s_zz: f64,
 }
 
+impl From<Reliability> for RveReliability {
+    fn from(r: Reliability) -> Self {
+        match r {
+            Reliability::Failed => RveReliability::Failed,
+            Reliability::Reliable => RveReliability::Reliable,
+            Reliability::Substepped => RveReliability::Substepped,
+        }
+    }
+}
+
 impl RveInfo {
-    fn from_response(r: &Response) -> Self {
+    fn from_report(r: &PointReport) -> Self {
         RveInfo {
-            iterations: r.report.iterations,
-            substeps: r.report.substeps,
-            factorizations: r.report.factorizations,
-            reliability: if r.report.substepped() {
-                RveReliability::Substepped as i32
-            } else {
-                RveReliability::Reliable as i32
-            },
-            suggested_step_ratio: r.report.suggested_step_ratio(),
+            iterations: r.iterations,
+            substeps: r.substeps,
+            factorizations: r.factorizations,
+            reliability: RveReliability::from(r.reliability) as i32,
+            suggested_step_ratio: r.suggested_step_ratio,
             s_zz: r.s_zz,
         }
     }
+}
 
-    fn failed(step_ratio: f64) -> Self {
-        RveInfo {
-            iterations: 0,
-            substeps: 0,
-            factorizations: 0,
-            reliability: RveReliability::Failed as i32,
-            suggested_step_ratio: step_ratio,
-            s_zz: 0.0,
+impl From<RveTangentRequest> for TangentRequest {
+    fn from(r: RveTangentRequest) -> Self {
+        match r {
+            RveTangentRequest::Consistent => TangentRequest::Consistent,
+            RveTangentRequest::None => TangentRequest::None,
+            RveTangentRequest::Elastic => TangentRequest::Elastic,
         }
     }
 }
@@ -120,17 +125,9 @@ pub(crate) fn update_entry(
     entry: &Arc<Entry>,
     strain: [f64; 3],
     dtime: f64,
-    request: RveTangentRequest,
+    request: TangentRequest,
 ) -> FfiResult<Response> {
-    let mut instance = entry.lock()?;
-    let request = match request {
-        RveTangentRequest::Consistent => TangentRequest::Consistent,
-        RveTangentRequest::None => TangentRequest::None,
-        RveTangentRequest::Elastic => TangentRequest::Elastic,
-    };
-    Ok(with_workspace(&entry.model, |ws| {
-        instance.update_timed(strain, dtime, ws, request)
-    })?)
+    Ok(entry.lock()?.update_point(strain, dtime, request)?)
 }
 
 fn new_instance(model: Arc<Model>, handle: &mut RveHandle) -> FfiResult {
@@ -358,20 +355,20 @@ unsafe fn update_core(
             }
         };
         let entry = entry?;
-        match update_entry(&entry, strain, dtime, request) {
+        match update_entry(&entry, strain, dtime, request.into()) {
             Ok(r) => {
                 stress.copy_from_slice(&r.stress);
                 if let Some(t) = tangent {
                     t.copy_from_slice(&r.tangent);
                 }
                 if let Some(info) = info.as_mut() {
-                    *info = RveInfo::from_response(&r);
+                    *info = RveInfo::from_report(&PointReport::from_response(&r));
                 }
                 Ok(())
             }
             Err(f) => {
                 if let (Some(ratio), Some(info)) = (f.step_ratio, info.as_mut()) {
-                    *info = RveInfo::failed(ratio);
+                    *info = RveInfo::from_report(&PointReport::failed(ratio));
                 }
                 Err(f)
             }

@@ -162,6 +162,8 @@ impl From<&Error> for RveStatus {
                 RveStatus::BadState
             }
             Error::HostConvention(_) => RveStatus::InvalidArgument,
+            Error::Panic(_) => RveStatus::Panic,
+            Error::Threads(_) => RveStatus::Internal,
         }
     }
 }

@@ -3,6 +3,7 @@
 //! [`crate::solver::Workspace`]. `from_scene` is the edge where the scene schema becomes
 //! the numerical modules' own types.
 
+pub mod batch;
 pub mod cache;
 mod fingerprint;
 mod from_scene;
@@ -13,6 +14,7 @@ mod rve_model;
 mod statev;
 pub(crate) mod workspaces;
 
+pub use batch::{update_batch, BatchOutputs, BatchPoint, BatchStep, PointReport, Reliability};
 pub use instance::Instance;
 pub use microstructure::build_microstructure;
 pub use rve_model::{Model, Response};
