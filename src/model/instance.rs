@@ -44,6 +44,9 @@ pub struct Instance {
     /// With IMPL-EX integration: the step ratio (bits) whose step of the committed state
     /// `trial.linear` holds, if any (see [`Model::implex_update`]).
     implex_step: Option<u64>,
+    /// Commits of a trial whose error estimate exceeded `solver.step_tolerance` (the host
+    /// kept an increment it was asked to redo smaller), and the last one's estimate.
+    ignored_redos: (u64, f64),
 }
 
 /// The trial awaiting [`Instance::commit`].
@@ -77,6 +80,7 @@ impl Instance {
             last: None,
             fast_updates: 0,
             implex_step: None,
+            ignored_redos: (0, 0.0),
         }
     }
 
@@ -88,6 +92,13 @@ impl Instance {
     /// strain ([`State::unknowns_are_current`]); [`Model::current_state`] forms them.
     pub fn committed(&self) -> &State {
         &self.committed
+    }
+
+    /// How many committed increments had an error estimate above `solver.step_tolerance`
+    /// (their update asked for a redo with a ratio below 1, and the host kept them), and
+    /// the last one's estimate relative to the tolerance. (0, 0) without a tolerance.
+    pub fn ignored_redos(&self) -> (u64, f64) {
+        self.ignored_redos
     }
 
     /// Whether a successful trial awaits [`commit`](Self::commit).
@@ -223,6 +234,15 @@ impl Instance {
     /// Accepts the last successful trial as the new converged state; `NoTrial` when
     /// there is none (no successful update since the last commit, revert, reset or load).
     pub fn commit(&mut self) -> Result<()> {
+        if let Some(e) = self
+            .last
+            .as_ref()
+            .and_then(|l| l.response.report.error_estimate)
+        {
+            if e > 1.0 && self.pending != Pending::Nothing {
+                self.ignored_redos = (self.ignored_redos.0 + 1, e);
+            }
+        }
         match (self.pending, &mut self.trial) {
             (Pending::Solved, Some(trial)) => {
                 std::mem::swap(&mut self.committed, trial);
