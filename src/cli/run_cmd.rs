@@ -136,7 +136,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if controlled && !args.quiet {
         eprintln!(
             "{name}: solver.step_tolerance: {} increments, {} redone smaller, {} kept above \
-             the tolerance at the smallest step (1/{MIN_FRACTION_INV} of the path's)",
+             the tolerance (the estimate did not fall with the step, or at the smallest \
+             step, 1/{MIN_FRACTION_INV} of the path's)",
             control.rows, control.redos, control.kept_above
         );
     }
@@ -196,7 +197,7 @@ impl StepControl {
                 self.step = (step * ratio).max(smallest);
                 continue;
             }
-            self.kept_above += usize::from(ratio < 1.0);
+            self.kept_above += usize::from(r.report.exceeds_tolerance());
             instance.commit()?;
             self.rows += 1;
             outputs.record(self.rows, eps, &r, seconds, instance.committed())?;

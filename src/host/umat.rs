@@ -351,9 +351,9 @@ pub fn note_ignored_redo(relative: f64) {
     warn_once(&IGNORED_NOTE, || {
         format!(
             "mesorve: the host kept an increment whose integration error is {relative:.3} \
-             times solver.step_tolerance instead of redoing it smaller as asked (PNEWDT / \
-             RveInfo.suggested_step_ratio < 1): the answer goes on, outside the tolerance \
-             (printed once)"
+             times solver.step_tolerance although it was asked to redo it smaller (PNEWDT / \
+             RveInfo.suggested_step_ratio < 1): it ignores the ratio or is at its smallest \
+             step; the analysis goes on outside the tolerance there (printed once)"
         )
     });
 }

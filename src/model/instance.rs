@@ -47,6 +47,9 @@ pub struct Instance {
     /// Commits of a trial whose error estimate exceeded `solver.step_tolerance` (the host
     /// kept an increment it was asked to redo smaller), and the last one's estimate.
     ignored_redos: (u64, f64),
+    /// The last update whose error estimate exceeded `solver.step_tolerance`: the bits of
+    /// its committed strain and step, its `dt` and its estimate (see [`Instance::judge`]).
+    exceeded: Option<([u64; 4], f64, f64)>,
 }
 
 /// The trial awaiting [`Instance::commit`].
@@ -81,6 +84,7 @@ impl Instance {
             fast_updates: 0,
             implex_step: None,
             ignored_redos: (0, 0.0),
+            exceeded: None,
         }
     }
 
@@ -204,6 +208,7 @@ impl Instance {
         self.implex_step = None;
         let mut response = model.implex_update(&self.committed, strain, dt, ws, trial, reuse)?;
         self.implex_step = Some(ratio);
+        self.judge(dt, &mut response.report);
         if reuse {
             self.fast_updates += 1;
         }
@@ -213,6 +218,27 @@ impl Instance {
         }
         self.pending = Pending::Solved;
         Ok(response)
+    }
+
+    /// Under `solver.step_tolerance`: an estimate above the tolerance that fell by less
+    /// than the square root of the step's ratio since the last such update from the same
+    /// committed state at a longer step is `irreducible` (ratio 1): IMPL-EX's error there is
+    /// of first order or more in the step where it is the step's, so cutting the step did
+    /// not touch this one (the RVE snapping back through the step; docs/step_control.md).
+    fn judge(&mut self, dt: f64, report: &mut crate::solver::IncrementReport) {
+        let Some(e) = report.error_estimate.filter(|&e| e > 1.0) else {
+            return;
+        };
+        let c = &self.committed;
+        let key = [c.strain[0], c.strain[1], c.strain[2], c.implex.step].map(f64::to_bits);
+        if let Some((k, longer, before)) = self.exceeded {
+            if k == key && dt > 0.0 && dt < longer && e > before * (dt / longer).sqrt() {
+                report.irreducible = true;
+            }
+        }
+        if !report.irreducible {
+            self.exceeded = Some((key, dt, e));
+        }
     }
 
     /// The pending trial's response when `strain` and `request` repeat its own, the strain
@@ -234,12 +260,9 @@ impl Instance {
     /// Accepts the last successful trial as the new converged state; `NoTrial` when
     /// there is none (no successful update since the last commit, revert, reset or load).
     pub fn commit(&mut self) -> Result<()> {
-        if let Some(e) = self
-            .last
-            .as_ref()
-            .and_then(|l| l.response.report.error_estimate)
-        {
-            if e > 1.0 && self.pending != Pending::Nothing {
+        if let Some(report) = self.last.as_ref().map(|l| l.response.report) {
+            if report.suggested_step_ratio() < 1.0 && self.pending != Pending::Nothing {
+                let e = report.error_estimate.unwrap_or(0.0);
                 self.ignored_redos = (self.ignored_redos.0 + 1, e);
             }
         }

@@ -196,6 +196,10 @@ pub struct IncrementReport {
     /// The step's integration error estimate relative to `solver.step_tolerance`
     /// (`eta / tol`, see [`super::implex::error_estimate`]); `None` without a tolerance.
     pub error_estimate: Option<f64>,
+    /// The estimate exceeds the tolerance but did not fall when the host redid the step
+    /// smaller (see `model::Instance`): the error is not the step's (the RVE snaps back
+    /// through it at any step), so the ratio is 1, not a further cut.
+    pub irreducible: bool,
 }
 
 /// How an update was answered.
@@ -219,6 +223,8 @@ impl IncrementReport {
     pub fn suggested_step_ratio(&self) -> f64 {
         if self.step_too_large {
             0.5
+        } else if self.irreducible {
+            1.0
         } else if let Some(e) = self.error_estimate {
             step_ratio_for(e)
         } else {
