@@ -578,7 +578,7 @@ static int record_step(Run *run, Step st, const Run *before) {
  * is the smaller |dU|. Not below 1/1024 of the phase's step `nominal`: a sub-step that
  * small is kept whatever the ratio (rve_commit then says so). */
 static int redo_smaller(Run *run, double taken, double nominal, double *length) {
-    if (!run->follow || !(run->ratio < 1.0) || taken <= nominal / 1024.0) return 0;
+    if (!run->follow || !(run->ratio < 1.0) || taken <= nominal / 1024.0 * (1 + 1e-9)) return 0;
     *length = fmax(taken * run->ratio, nominal / 1024.0);
     run->redos++;
     return 1;

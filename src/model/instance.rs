@@ -220,11 +220,11 @@ impl Instance {
         Ok(response)
     }
 
-    /// Under `solver.step_tolerance`: an estimate above the tolerance that fell by less
-    /// than the square root of the step's ratio since the last such update from the same
-    /// committed state at a longer step is `irreducible` (ratio 1): IMPL-EX's error there is
-    /// of first order or more in the step where it is the step's, so cutting the step did
-    /// not touch this one (the RVE snapping back through the step; docs/step_control.md).
+    /// Under `solver.step_tolerance`: an estimate above the tolerance that did not fall
+    /// at all since the last such update from the same committed state at a longer step is
+    /// `irreducible` (ratio 1): IMPL-EX's error falls with the step where it is the
+    /// step's, so cutting the step did not touch this one (the RVE snapping back through
+    /// the step; docs/step_control.md).
     fn judge(&mut self, dt: f64, report: &mut crate::solver::IncrementReport) {
         let Some(e) = report.error_estimate.filter(|&e| e > 1.0) else {
             return;
@@ -232,7 +232,7 @@ impl Instance {
         let c = &self.committed;
         let key = [c.strain[0], c.strain[1], c.strain[2], c.implex.step].map(f64::to_bits);
         if let Some((k, longer, before)) = self.exceeded {
-            if k == key && dt > 0.0 && dt < longer && e > before * (dt / longer).sqrt() {
+            if k == key && dt > 0.0 && dt < longer && e >= before {
                 report.irreducible = true;
             }
         }
