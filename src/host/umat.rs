@@ -80,6 +80,9 @@ use crate::state::statev;
 
 /// Printed once per process when an increment's answer depends on its size.
 static STEP_NOTE: std::sync::Once = std::sync::Once::new();
+/// The largest `PNEWDT` asked for an increment whose error exceeds `solver.step_tolerance`.
+const TOLERANCE_CUT: f64 = 0.5;
+
 /// Printed once per process when an increment's error exceeds `solver.step_tolerance`.
 static TOLERANCE_NOTE: std::sync::Once = std::sync::Once::new();
 /// Printed once per process when a host keeps such an increment.
@@ -365,6 +368,9 @@ pub fn note_ignored_redo(relative: f64) {
 fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
     let ratio = r.report.suggested_step_ratio();
     if r.report.exceeds_tolerance() && ratio < 1.0 {
+        // At most half the increment: ccx allows few cut-backs of one increment (`*CONTROLS`,
+        // 5 by default), which ratios of 0.8 or 0.9 spend without reaching the tolerance.
+        let ratio = ratio.min(TOLERANCE_CUT);
         request_step_ratio(out.pnewdt, ratio);
         TOLERANCE_NOTE.call_once(|| {
             eprintln!(
