@@ -22,14 +22,16 @@ fn implex_text(extra: &str) -> String {
     )])
 }
 
-/// The §5.2.1 path, each increment's time its strain norm (as `rve run` passes it).
-fn follow(text: &str) -> Vec<Response> {
+/// The §5.2.1 path, each increment's time its strain norm (as `rve run` passes it), every
+/// increment committed (a host that ignores the ratio); the responses and the instance's
+/// count of kept increments it was asked to redo.
+fn follow(text: &str) -> (Vec<Response>, u64) {
     let scene = Scene::from_toml_str(text, common::repo("scenes")).unwrap();
     let model = Arc::new(Model::from_scene(&scene).unwrap());
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
     let mut previous = [0.0; 3];
-    path_points(&scene.spec.path)
+    let responses = path_points(&scene.spec.path)
         .into_iter()
         .map(|eps| {
             let dt = (0..3)
@@ -43,17 +45,19 @@ fn follow(text: &str) -> Vec<Response> {
             instance.commit().unwrap();
             r
         })
-        .collect()
+        .collect();
+    (responses, instance.ignored_redos().0)
 }
 
 /// Without a tolerance nothing is estimated and the ratio is 1; with one, the answers
 /// are the same bits, every increment has an estimate, and some increment of the crack
 /// exceeds 0.01 (the path's 20 increments are too coarse for it) while the first,
-/// elastic one offers to grow.
+/// elastic one offers to grow. A host that commits every increment is counted as having
+/// kept each one it was asked to redo, and only those: not the implicit step check's.
 #[test]
-fn the_estimate_changes_no_answer_and_the_default_estimates_nothing() {
-    let plain = follow(&implex_text(""));
-    let controlled = follow(&implex_text("step_tolerance = 0.01\n"));
+fn the_estimate_changes_no_answer_and_kept_redos_are_counted() {
+    let (plain, none_ignored) = follow(&implex_text(""));
+    let (controlled, ignored) = follow(&implex_text("step_tolerance = 0.01\n"));
     for (a, b) in plain.iter().zip(&controlled) {
         assert_eq!(a.stress, b.stress);
         assert_eq!(a.tangent, b.tangent);
@@ -62,11 +66,20 @@ fn the_estimate_changes_no_answer_and_the_default_estimates_nothing() {
         assert!(b.report.error_estimate.is_some());
     }
     assert!(controlled[0].report.suggested_step_ratio() > 1.0);
-    assert!(controlled
+    let asked = controlled
         .iter()
-        .any(|r| r.report.suggested_step_ratio() < 1.0
-            && r.report.exceeds_tolerance()
-            && r.report.substepped()));
+        .filter(|r| r.report.suggested_step_ratio() < 1.0)
+        .inspect(|r| assert!(r.report.exceeds_tolerance() && r.report.substepped()))
+        .count();
+    assert!(asked > 0);
+    assert_eq!((none_ignored, ignored), (0, asked as u64));
+    // tests/step_check.rs: the last of these increments lands beyond the snap-back.
+    let (implicit, implicit_ignored) = follow(&common::paper_scene_with(&[(
+        "to = [2.2e-4, 0.0, 0.0]\nincrements = 20",
+        "to = [1.5e-4, 0.0, 0.0]\nincrements = 10\n\n[[path]]\nto = [2.25e-4, 0.0, 0.0]\nincrements = 1",
+    )]));
+    assert!(implicit.iter().any(|r| r.report.step_too_large));
+    assert_eq!(implicit_ignored, 0);
 }
 
 /// The scene's tolerance must be a relative error and needs IMPL-EX.

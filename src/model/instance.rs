@@ -261,7 +261,8 @@ impl Instance {
     /// there is none (no successful update since the last commit, revert, reset or load).
     pub fn commit(&mut self) -> Result<()> {
         if let Some(report) = self.last.as_ref().map(|l| l.response.report) {
-            if report.suggested_step_ratio() < 1.0 && self.pending != Pending::Nothing {
+            let asked = report.exceeds_tolerance() && report.suggested_step_ratio() < 1.0;
+            if asked && self.pending != Pending::Nothing {
                 let e = report.error_estimate.unwrap_or(0.0);
                 self.ignored_redos = (self.ignored_redos.0 + 1, e);
             }
