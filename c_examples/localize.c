@@ -75,6 +75,14 @@
  *            least time of each (default 1; every repeat must give the same curves)
  * Before the runs one untimed update of an instance of the scene warms the process up
  * (its first update costs about 70 ms more than the same update later).
+ * Step control. With a scene that sets solver.step_tolerance (IMPL-EX) the host follows
+ * the RVEs' suggested_step_ratio (RveInfo): a converged sub-step whose smallest ratio is
+ * below 1 is reverted and redone that much smaller (not below 1/1024 of the phase's
+ * step), and the next sub-step is the last times the smallest ratio when that exceeds 1
+ * (at most the rest of the nominal step: the deck's steps are the largest). Every step's
+ * answer then keeps the RVEs' integration error within the tolerance.
+ * LOCALIZE_IGNORE_RATIO=1 ignores the ratio: the steps are the nominal ones, and
+ * rve_commit says once on stderr that an increment above the tolerance was kept.
  * LOCALIZE_VERBOSE=1 prints every Newton iteration with a map of the points
  * (F: answered without a solve; s, w: solved, strong and band points).
  */
@@ -137,6 +145,9 @@ typedef struct {
     unsigned long updates, updates_phase[NPHASE], fast_phase[NPHASE];
     unsigned long factorizations, fact_phase[NPHASE];
     double dtime; /* the time increment of the step being solved (0: none passed) */
+    double ratio; /* the smallest suggested_step_ratio of the last assembly's updates */
+    int follow;   /* follow the ratio (scene with solver.step_tolerance) */
+    int redos;    /* converged sub-steps redone smaller on the ratio */
     double rve_seconds, seconds, rve_phase[NPHASE];
     double f_max, f_zero;
     uint64_t fast_total;
@@ -149,6 +160,7 @@ typedef struct {
 } Times;
 
 static int verbose;
+static int follow_ratio; /* the scene sets solver.step_tolerance and LOCALIZE_IGNORE_RATIO is unset */
 
 static int report(uint32_t st, const char *what) {
     char msg[512];
@@ -377,6 +389,7 @@ static uint32_t assemble(Run *run, const double *u, double *fint, double *k, dou
     int e, g, a, c, r;
     memset(fint, 0, sizeof(double) * NDOF);
     memset(k, 0, sizeof(double) * NDOF * NDOF);
+    run->ratio = INFINITY;
     for (e = 0; e < NEL; e++) {
         int dofs[8];
         for (a = 0; a < 4; a++) {
@@ -396,6 +409,8 @@ static uint32_t assemble(Run *run, const double *u, double *fint, double *k, dou
             st = rve_update_timed(run->h[pt], eps, run->dtime, sig, d,
                                   RVE_TANGENT_REQUEST_CONSISTENT, &info);
             t1 = now();
+            if (st == RVE_STATUS_OK && info.suggested_step_ratio < run->ratio)
+                run->ratio = info.suggested_step_ratio;
             if (st == RVE_STATUS_OK || st == RVE_STATUS_SOLVER_FAILED) {
                 run->factorizations += info.factorizations;
                 run->fact_phase[phase] += info.factorizations;
@@ -558,17 +573,30 @@ static int record_step(Run *run, Step st, const Run *before) {
     return 0;
 }
 
+/* Following the ratio (run->follow): whether the converged sub-step of |dU| = taken must
+ * be redone smaller, the RVEs' smallest suggested_step_ratio being below 1; then *length
+ * is the smaller |dU|. Not below 1/1024 of the phase's step `nominal`: a sub-step that
+ * small is kept whatever the ratio (rve_commit then says so). */
+static int redo_smaller(Run *run, double taken, double nominal, double *length) {
+    if (!run->follow || !(run->ratio < 1.0) || taken <= nominal / 1024.0 * (1 + 1e-9)) return 0;
+    *length = fmax(taken * run->ratio, nominal / 1024.0);
+    run->redos++;
+    return 1;
+}
+
 /* The whole analysis with the given scene texts (strong points: the file when
  * strong_text is NULL). Each sub-step passes its time increment |dU| (none with
  * no_time). */
 static int analyse(Run *run, const char *scene_file, const char *strong_text,
                    const char *weak_text, const char *base_dir, int scale, int no_time) {
-    static double u[NDOF], k_conv[NDOF * NDOF], c[NDOF];
+    static double u[NDOF], k_conv[NDOF * NDOF], c[NDOF], u_save[NDOF], k_save[NDOF * NDOF];
     static Run before; /* the counters at the start of an attempt */
     int p, i, have_k = 0, failed = 1;
+    double length = 0.0; /* following the ratio: the next sub-step's |dU| (0: the step's) */
     const int nsteps[NPHASE] = {N_TENSION * scale, N_UNLOAD * scale, N_COMP * scale};
     double t_start = now();
     memset(u, 0, sizeof u);
+    run->follow = follow_ratio;
     if (init_points(run, scene_file, strong_text, weak_text, base_dir)) goto out;
     control(c);
     for (p = 0; p < NPHASE; p++) { /* the nominal ends: the same targets in every run */
@@ -581,12 +609,22 @@ static int analyse(Run *run, const char *scene_file, const char *strong_text,
             if (s == nsteps[p]) target = end;
             while (done != target) { /* sub-steps, halved on failure */
                 double next = cuts == 0 ? target : done + (target - done) / (double)(1 << cuts);
+                double taken;
                 Step st;
+                if (run->follow && length > 0.0 && fabs(next - done) > length * (1 + 1e-9))
+                    next = done + (target > done ? length : -length);
+                taken = fabs(next - done);
                 before = *run;
-                run->dtime = no_time ? 0.0 : fabs(next - done);
-                if (newton(run, p, c, next, u, k_conv, have_k, &st)) {
+                run->dtime = no_time ? 0.0 : taken;
+                memcpy(u_save, u, sizeof u);
+                memcpy(k_save, k_conv, sizeof k_conv);
+                if (newton(run, p, c, next, u, k_conv, have_k, &st) ||
+                    redo_smaller(run, taken, fabs(end - start) / nsteps[p], &length)) {
+                    memcpy(u, u_save, sizeof u);
+                    memcpy(k_conv, k_save, sizeof k_conv);
                     for (i = 0; i < NPT; i++)
                         if (report(rve_revert(run->h[i]), "rve_revert")) goto out;
+                    if (run->follow && length > 0.0 && length < taken) continue; /* redo smaller */
                     run->cuts++;
                     if (++cuts > MAX_CUTS) {
                         fprintf(stderr, "localize: %s: no convergence at %.6e after %d cuts\n",
@@ -602,6 +640,10 @@ static int analyse(Run *run, const char *scene_file, const char *strong_text,
                 have_k = 1;
                 done = next;
                 if (cuts > 0) cuts--; /* then try a longer sub-step again */
+                if (run->follow && !(next == target && taken < length))
+                    /* the next sub-step: this one times the ratio, if it grows (a piece cut
+                     * short by the step's end does not shorten the next) */
+                    length = taken * (run->ratio > 1.0 && isfinite(run->ratio) ? run->ratio : 1.0);
             }
         }
         if (p == UNLOAD) run->f_zero = run->steps[run->nsteps - 1].f;
@@ -842,6 +884,10 @@ static void print_times(const Pair *pr, int all_fast) {
            "(first runs; whole runs %.3f s and %.3f s; steps cut %d and %d)\n",
            f->rve_seconds, o->rve_seconds, f->rve_seconds > 0 ? o->rve_seconds / f->rve_seconds : 0.0,
            f->seconds, o->seconds, f->cuts, o->cuts);
+    if (f->follow)
+        printf("step control (solver.step_tolerance): %d converged sub-steps redone smaller on the "
+               "RVEs' suggested_step_ratio (%d without the fast path); %d steps in all\n",
+               f->redos, o->redos, f->nsteps);
     if (pr->repeats > 1)
         printf("  least of %d runs each: %.3f s and %.3f s: ratio %.2f; summed: ratio %.2f\n",
                pr->repeats, pr->min_fast, pr->min_off, pr->min_off / pr->min_fast,
@@ -952,6 +998,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (prepare(&sc, scene) || warm_up(scene)) goto done;
+    follow_ratio = strstr(sc.text, "step_tolerance") != NULL && !getenv("LOCALIZE_IGNORE_RATIO");
     curve_tol = sc.implex ? 0.0 : CURVE_TOL; /* IMPL-EX: bit-identical (see the header) */
     printf("localize: %s (%s%s), %d x %d quads, %d RVEs (band: column %d, sigma_c x %.2f); "
            "%d + %d + %d steps; %d run%s with and without the fast path\n",

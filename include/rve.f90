@@ -117,7 +117,7 @@ module rve
     integer(c_int32_t) :: substeps            ! uint32_t: accepted sub-steps (1: one go)
     integer(c_int32_t) :: factorizations      ! uint32_t: numeric factorizations
     integer(c_int32_t) :: reliability         ! an RVE_RELIABILITY_* value
-    real(c_double) :: suggested_step_ratio    ! UMAT's PNEWDT: 1 on success, < 1 on failure
+    real(c_double) :: suggested_step_ratio    ! < 1: redo smaller (failure, step check, tolerance); > 1: may grow
     real(c_double) :: s_zz                    ! out-of-plane stress (plane strain; else 0)
   end type rve_info
 

@@ -95,8 +95,9 @@ typedef enum RveReliability {
   // Converged to the scene's tolerance, but only after bisecting the increment
   // (`substeps > 1`), or to an answer that depends on the increment's size (a step
   // beyond a snap-back that half steps take, `solver.step_check`; then
-  // `suggested_step_ratio` is 0.5): the host's increments are large for this material
-  // state.
+  // `suggested_step_ratio` is 0.5), or with an integration error above
+  // `solver.step_tolerance` (`suggested_step_ratio` < 1): the host's increments are
+  // large for this material state.
   RVE_RELIABILITY_SUBSTEPPED = 2,
 } RveReliability;
 
@@ -145,8 +146,11 @@ typedef struct RveInfo {
   uint32_t factorizations;
   // An `RveReliability` value.
   int32_t reliability;
-  // Suggested ratio of the next macro increment to this one (UMAT's PNEWDT): 1.0 on
-  // success, < 1 after a solver failure or for an answer that depends on the step.
+  // Suggested ratio of the next macro increment to this one: < 1 after a solver
+  // failure, for an answer that depends on the step, or (`solver.step_tolerance`) for an
+  // increment whose integration error exceeds the tolerance: redo it that much
+  // smaller; > 1 (at most 2) under `solver.step_tolerance` when the error is well below
+  // it: the next increment may be that much larger; 1.0 otherwise.
   double suggested_step_ratio;
   // Out-of-plane stress `s_zz` (plane strain; 0 in plane stress), stress units.
   double s_zz;

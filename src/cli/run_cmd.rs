@@ -69,7 +69,7 @@ fn parse_frames(s: &str) -> std::result::Result<Frames, String> {
 }
 
 /// Header of `response.csv`; the C driver writes the same columns.
-pub const CSV_HEADER: &str = "step,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy,D11,D12,D13,D21,D22,D23,D31,D32,D33,iterations,substeps,s_zz,factorizations,loading_points,unloading_points,contact_points,seconds,limit_points,held_points,fast";
+pub const CSV_HEADER: &str = "step,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy,D11,D12,D13,D21,D22,D23,D31,D32,D33,iterations,substeps,s_zz,factorizations,loading_points,unloading_points,contact_points,seconds,limit_points,held_points,fast,check_factorizations,step_too_large,error_estimate,step_ratio";
 
 pub fn run(args: &RunArgs) -> Result<()> {
     let (scene, name) = load_scene(args.scene.as_ref())?;
@@ -103,12 +103,19 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ProgressBar::new(points.len() as u64).with_style(style)
     });
     let times = step_times(&points);
+    let controlled = scene.spec.solver.step_tolerance.is_some();
+    let mut control = StepControl::default();
     for (step, eps) in points.into_iter().enumerate() {
-        let t0 = Instant::now();
-        let r = instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
-        let seconds = t0.elapsed().as_secs_f64();
-        instance.commit()?;
-        outputs.record(step + 1, eps, &r, seconds, instance.committed())?;
+        let r = if controlled {
+            control.follow(&mut instance, &mut ws, &mut outputs, eps, times[step])?
+        } else {
+            let t0 = Instant::now();
+            let r = instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
+            let seconds = t0.elapsed().as_secs_f64();
+            instance.commit()?;
+            outputs.record(step + 1, eps, &r, seconds, instance.committed())?;
+            r
+        };
         if let Some(bar) = &bar {
             bar.set_message(format!(
                 "sig = [{:+.4} {:+.4} {:+.4}]",
@@ -126,7 +133,87 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(bar) = &bar {
         bar.finish();
     }
+    if controlled && !args.quiet {
+        eprintln!(
+            "{name}: solver.step_tolerance: {} increments, {} redone smaller, {} kept above \
+             the tolerance (the estimate did not fall with the step, or at the smallest \
+             step, 1/{MIN_FRACTION_INV} of the path's)",
+            control.rows, control.redos, control.kept_above
+        );
+    }
     outputs.finish()
+}
+
+/// Smallest step `rve run` takes under `solver.step_tolerance`, as a fraction of the
+/// path's own increment: a step that still exceeds the tolerance there is kept.
+const MIN_FRACTION_INV: u32 = 1024;
+
+/// `rve run` as a host that follows the suggested step ratio (`solver.step_tolerance`):
+/// each path increment is the largest step, a step whose ratio is below 1 is redone that
+/// much smaller, and the next step is the ratio times the last (capped by the path's
+/// increment, ending on each path point). Every accepted step is a row.
+#[derive(Default)]
+struct StepControl {
+    /// The next step as a strain norm (0: the path's increment).
+    step: f64,
+    rows: usize,
+    redos: usize,
+    kept_above: usize,
+}
+
+impl StepControl {
+    /// Steps from the committed strain to the path point `target`, `nominal` (its strain
+    /// norm) away; returns the last accepted response.
+    fn follow(
+        &mut self,
+        instance: &mut Instance,
+        ws: &mut rve::Workspace,
+        outputs: &mut Outputs,
+        target: [f64; 3],
+        nominal: f64,
+    ) -> Result<Response> {
+        let start = instance.committed().strain;
+        let (mut done, mut seconds) = (0.0, 0.0);
+        let smallest = nominal / f64::from(MIN_FRACTION_INV);
+        loop {
+            let mut step = if self.step > 0.0 {
+                self.step.min(nominal)
+            } else {
+                nominal
+            };
+            if nominal - done <= step * (1.0 + 1e-9) || nominal <= 0.0 {
+                step = nominal - done;
+            }
+            let last = nominal <= 0.0 || done + step >= nominal;
+            let s = if last { 1.0 } else { (done + step) / nominal };
+            let eps: [f64; 3] = std::array::from_fn(|c| start[c] + s * (target[c] - start[c]));
+            let t0 = Instant::now();
+            let r = instance.update_timed(eps, step, ws, TangentRequest::Consistent)?;
+            seconds += t0.elapsed().as_secs_f64();
+            let ratio = r.report.suggested_step_ratio();
+            if ratio < 1.0 && step > smallest {
+                instance.revert();
+                self.redos += 1;
+                self.step = (step * ratio).max(smallest);
+                continue;
+            }
+            self.kept_above += usize::from(r.report.exceeds_tolerance());
+            instance.commit()?;
+            self.rows += 1;
+            outputs.record(self.rows, eps, &r, seconds, instance.committed())?;
+            seconds = 0.0;
+            // A last piece cut short by the path point does not limit the next step.
+            self.step = if last && step < self.step {
+                self.step
+            } else {
+                step * ratio.max(1.0)
+            };
+            if last {
+                return Ok(r);
+            }
+            done += step;
+        }
+    }
 }
 
 /// The files of one `rve run`: `response.csv`, and what `--vtk` and `--svg` ask for.
@@ -207,12 +294,14 @@ impl<'a> Outputs<'a> {
         let d = r.tangent;
         writeln!(
             self.csv,
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:e},{},{},{},{},{:e},{},{},{}",
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:e},{},{},{},{},{:e},{},{},{},{},{},{:e},{:e}",
             step, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
             d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8],
             r.report.iterations, r.report.substeps, r.s_zz, r.report.factorizations,
             r.report.loading, r.report.unloading, r.report.contact, seconds,
-            r.report.limit_points, r.report.held_points, u8::from(r.report.answer.is_fast())
+            r.report.limit_points, r.report.held_points, u8::from(r.report.answer.is_fast()),
+            r.report.check_factorizations, u8::from(r.report.step_too_large),
+            r.report.error_estimate.unwrap_or(0.0), r.report.suggested_step_ratio()
         )
         .map_err(io_error(&self.csv_path))?;
         if let Some(dir) = &self.args.vtk {

@@ -63,8 +63,9 @@ pub enum RveReliability {
     /// Converged to the scene's tolerance, but only after bisecting the increment
     /// (`substeps > 1`), or to an answer that depends on the increment's size (a step
     /// beyond a snap-back that half steps take, `solver.step_check`; then
-    /// `suggested_step_ratio` is 0.5): the host's increments are large for this material
-    /// state.
+    /// `suggested_step_ratio` is 0.5), or with an integration error above
+    /// `solver.step_tolerance` (`suggested_step_ratio` < 1): the host's increments are
+    /// large for this material state.
     Substepped = 2,
 }
 
@@ -80,8 +81,11 @@ pub struct RveInfo {
     pub factorizations: u32,
     /// An `RveReliability` value.
     pub reliability: i32,
-    /// Suggested ratio of the next macro increment to this one (UMAT's PNEWDT): 1.0 on
-    /// success, < 1 after a solver failure or for an answer that depends on the step.
+    /// Suggested ratio of the next macro increment to this one: < 1 after a solver
+    /// failure, for an answer that depends on the step, or (`solver.step_tolerance`) for an
+    /// increment whose integration error exceeds the tolerance: redo it that much
+    /// smaller; > 1 (at most 2) under `solver.step_tolerance` when the error is well below
+    /// it: the next increment may be that much larger; 1.0 otherwise.
     pub suggested_step_ratio: f64,
     /// Out-of-plane stress `s_zz` (plane strain; 0 in plane stress), stress units.
     pub s_zz: f64,
@@ -416,7 +420,14 @@ fn with_instance(name: &str, h: RveHandle, f: impl FnOnce(&mut Instance) -> FfiR
 /// `INSTANCE_BUSY` or `PANIC`.
 #[no_mangle]
 pub extern "C" fn rve_commit(h: RveHandle) -> u32 {
-    with_instance("rve_commit", h, |i| Ok(i.commit()?))
+    with_instance("rve_commit", h, |i| {
+        let ignored = i.ignored_redos().0;
+        i.commit()?;
+        if i.ignored_redos().0 > ignored {
+            crate::host::umat::note_ignored_redo(i.ignored_redos().1);
+        }
+        Ok(())
+    })
 }
 
 /// Discards the last trial; the committed state stays. Returns `OK`, `BAD_HANDLE`,

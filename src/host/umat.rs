@@ -91,6 +91,13 @@ use crate::state::statev;
 
 /// Printed once per process when an increment's answer depends on its size.
 static STEP_NOTE: std::sync::Once = std::sync::Once::new();
+/// The largest `PNEWDT` asked for an increment whose error exceeds `solver.step_tolerance`.
+const TOLERANCE_CUT: f64 = 0.5;
+
+/// Printed once per process when an increment's error exceeds `solver.step_tolerance`.
+static TOLERANCE_NOTE: std::sync::Once = std::sync::Once::new();
+/// Printed once per process when a host keeps such an increment.
+static IGNORED_NOTE: std::sync::Once = std::sync::Once::new();
 
 /// `PNEWDT` after a failure other than the solver's (which suggests its own ratio).
 pub const FAILURE_STEP_RATIO: f64 = 0.25;
@@ -365,8 +372,12 @@ impl Point {
             let same = prev.kstep == inc.kstep && prev.kinc == inc.kinc && !advanced;
             if !same {
                 if self.last.take().is_some() {
+                    let ignored = self.instance.ignored_redos().0;
                     self.instance.commit()?;
                     committed = true;
+                    if self.instance.ignored_redos().0 > ignored {
+                        note_ignored_redo(self.instance.ignored_redos().1);
+                    }
                 }
             } else if self.failed || dtime < self.dtime * (1.0 - TIME_ROUNDOFF) {
                 self.instance.revert();
@@ -402,13 +413,45 @@ struct Failed {
     material: Option<Arc<Material>>,
 }
 
-/// `PNEWDT` < 1 when the answer depends on the increment's size (`solver.step_check`),
-/// said once per process on stderr.
+/// Said once per process when a host kept an increment whose integration error exceeded
+/// `solver.step_tolerance` (`relative`: its estimate over the tolerance): the host ignored
+/// the request to redo it smaller. Shared by the UMAT's table mode and `rve_commit`.
+pub fn note_ignored_redo(relative: f64) {
+    warn_once(&IGNORED_NOTE, || {
+        format!(
+            "mesorve: the host kept an increment whose integration error is {relative:.3} \
+             times solver.step_tolerance although it was asked to redo it smaller (PNEWDT / \
+             RveInfo.suggested_step_ratio < 1): it ignores the ratio or is at its smallest \
+             step; the analysis goes on outside the tolerance there (printed once)"
+        )
+    });
+}
+
+/// `PNEWDT` < 1 when the answer depends on the increment's size (`solver.step_check`) or
+/// its integration error exceeds `solver.step_tolerance`, said once per process on
+/// stderr. A ratio of 1 or more is never written: ccx takes any positive `PNEWDT` as a
+/// request to redo the increment (`docs/calculix.md`); growth is the host's own rule.
 fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
+    let ratio = r.report.suggested_step_ratio();
+    if r.report.exceeds_tolerance() && ratio < 1.0 {
+        // At most half the increment: ccx allows few cut-backs of one increment (`*CONTROLS`,
+        // 5 by default), which ratios of 0.8 or 0.9 spend without reaching the tolerance.
+        let ratio = ratio.min(TOLERANCE_CUT);
+        request_step_ratio(out.pnewdt, ratio);
+        TOLERANCE_NOTE.call_once(|| {
+            eprintln!(
+                "mesorve: element {}, point {}: the increment's integration error is {:.3} \
+                 times solver.step_tolerance: PNEWDT = {ratio:.3} asks for a smaller step \
+                 (printed once)",
+                c.noel,
+                c.npt,
+                r.report.error_estimate.unwrap_or(0.0)
+            )
+        });
+    }
     if !r.report.step_too_large {
         return;
     }
-    let ratio = r.report.suggested_step_ratio();
     request_step_ratio(out.pnewdt, ratio);
     STEP_NOTE.call_once(|| {
         eprintln!(

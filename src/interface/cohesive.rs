@@ -490,6 +490,11 @@ impl InterfaceLaw for CohesiveLaw {
         })
     }
 
+    /// `sigma_c`, the peak of the envelope's normal traction.
+    fn traction_scale(&self) -> f64 {
+        self.sigma_c
+    }
+
     /// `delta_max` extrapolated; it never decreases (`h_n >= h_{n-1}` and `ratio >= 0`).
     fn extrapolate(&self, committed: &[f64], previous: &[f64], ratio: f64, out: &mut [f64]) {
         for ((o, &h), &p) in out.iter_mut().zip(committed).zip(previous) {

@@ -134,6 +134,13 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         None
     }
 
+    /// The traction below which a difference of tractions is measured in absolute terms
+    /// (the law's strength; `solver::implex::error_estimate`). The default, 0, measures
+    /// every difference relative to the tractions themselves.
+    fn traction_scale(&self) -> f64 {
+        0.0
+    }
+
     /// The history after a step, extrapolated from the last two converged ones
     /// (`previous`, then `committed`) for a step `ratio` times as long as the last
     /// (Oliver, Huespe & Cante 2008): `h_ex = h_n + ratio (h_n - h_{n-1})`. Written into

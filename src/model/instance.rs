@@ -44,6 +44,12 @@ pub struct Instance {
     /// With IMPL-EX integration: the step ratio (bits) whose step of the committed state
     /// `trial.linear` holds, if any (see [`Model::implex_update`]).
     implex_step: Option<u64>,
+    /// Commits of a trial whose error estimate exceeded `solver.step_tolerance` (the host
+    /// kept an increment it was asked to redo smaller), and the last one's estimate.
+    ignored_redos: (u64, f64),
+    /// The last update whose error estimate exceeded `solver.step_tolerance`: the bits of
+    /// its committed strain and step, its `dt` and its estimate (see [`Instance::judge`]).
+    exceeded: Option<([u64; 4], f64, f64)>,
 }
 
 /// The trial awaiting [`Instance::commit`].
@@ -77,6 +83,8 @@ impl Instance {
             last: None,
             fast_updates: 0,
             implex_step: None,
+            ignored_redos: (0, 0.0),
+            exceeded: None,
         }
     }
 
@@ -88,6 +96,13 @@ impl Instance {
     /// strain ([`State::unknowns_are_current`]); [`Model::current_state`] forms them.
     pub fn committed(&self) -> &State {
         &self.committed
+    }
+
+    /// How many committed increments had an error estimate above `solver.step_tolerance`
+    /// (their update asked for a redo with a ratio below 1, and the host kept them), and
+    /// the last one's estimate relative to the tolerance. (0, 0) without a tolerance.
+    pub fn ignored_redos(&self) -> (u64, f64) {
+        self.ignored_redos
     }
 
     /// Whether a successful trial awaits [`commit`](Self::commit).
@@ -193,6 +208,7 @@ impl Instance {
         self.implex_step = None;
         let mut response = model.implex_update(&self.committed, strain, dt, ws, trial, reuse)?;
         self.implex_step = Some(ratio);
+        self.judge(dt, &mut response.report);
         if reuse {
             self.fast_updates += 1;
         }
@@ -202,6 +218,27 @@ impl Instance {
         }
         self.pending = Pending::Solved;
         Ok(response)
+    }
+
+    /// Under `solver.step_tolerance`: an estimate above the tolerance that did not fall
+    /// at all since the last such update from the same committed state at a longer step is
+    /// `irreducible` (ratio 1): IMPL-EX's error falls with the step where it is the
+    /// step's, so cutting the step did not touch this one (the RVE snapping back through
+    /// the step; docs/step_control.md).
+    fn judge(&mut self, dt: f64, report: &mut crate::solver::IncrementReport) {
+        let Some(e) = report.error_estimate.filter(|&e| e > 1.0) else {
+            return;
+        };
+        let c = &self.committed;
+        let key = [c.strain[0], c.strain[1], c.strain[2], c.implex.step].map(f64::to_bits);
+        if let Some((k, longer, before)) = self.exceeded {
+            if k == key && dt > 0.0 && dt < longer && e >= before {
+                report.irreducible = true;
+            }
+        }
+        if !report.irreducible {
+            self.exceeded = Some((key, dt, e));
+        }
     }
 
     /// The pending trial's response when `strain` and `request` repeat its own, the strain
@@ -223,6 +260,13 @@ impl Instance {
     /// Accepts the last successful trial as the new converged state; `NoTrial` when
     /// there is none (no successful update since the last commit, revert, reset or load).
     pub fn commit(&mut self) -> Result<()> {
+        if let Some(report) = self.last.as_ref().map(|l| l.response.report) {
+            let asked = report.exceeds_tolerance() && report.suggested_step_ratio() < 1.0;
+            if asked && self.pending != Pending::Nothing {
+                let e = report.error_estimate.unwrap_or(0.0);
+                self.ignored_redos = (self.ignored_redos.0 + 1, e);
+            }
+        }
         match (self.pending, &mut self.trial) {
             (Pending::Solved, Some(trial)) => {
                 std::mem::swap(&mut self.committed, trial);

@@ -308,6 +308,11 @@ impl Model {
             report.answer = Answer::FastPath;
         }
         let (stress, s_zz) = fast_path::response(&trial.linear, &strain);
+        if let Some(tolerance) = self.solver.step_tolerance {
+            let ratio = implex::step_ratio(committed.implex.step, dt);
+            let eta = implex::error_estimate(&problem, committed, trial, ratio, &strain);
+            report.error_estimate = Some(eta / tolerance);
+        }
         Ok(Response {
             stress,
             tangent: trial.linear.tangent,

@@ -203,6 +203,22 @@ fn validate_solver(s: &SolverSpec) -> Result<()> {
             "must be at most 10000",
         ));
     }
+    if let Some(t) = s.step_tolerance {
+        positive("solver.step_tolerance", t)?;
+        if t >= 1.0 {
+            return Err(Error::scene(
+                "solver.step_tolerance",
+                format!("must be below 1 (a relative error), got {t}"),
+            ));
+        }
+        if s.integration != crate::solver::Integration::Implex {
+            return Err(Error::scene(
+                "solver.step_tolerance",
+                "applies to integration = \"implex\" only: the implicit scheme's step is \
+                 controlled by solver.step_check (see docs/step_control.md)",
+            ));
+        }
+    }
     if s.max_substep_depth > 20 {
         return Err(Error::scene(
             "solver.max_substep_depth",

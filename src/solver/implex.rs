@@ -177,11 +177,7 @@ pub fn finish_step(
     trial.implex.closed.resize(held_contact_words(points), 0);
     let linear = &trial.linear;
     for q in 0..points {
-        let a = &linear.jumps[JUMP_OPERATOR_LEN * q..JUMP_OPERATOR_LEN * (q + 1)];
-        let component = |c: &[f32]| {
-            f64::from(c[0]) * strain[0] + f64::from(c[1]) * strain[1] + f64::from(c[2]) * strain[2]
-        };
-        let jump = [component(&a[..3]), component(&a[3..])];
+        let jump = point_jump(linear, q, strain);
         let closed = law.is_closed(jump);
         let range = q * hl..(q + 1) * hl;
         let length = problem.disc.interfaces[q / np].length;
@@ -203,6 +199,71 @@ pub fn finish_step(
         }
     }
     report
+}
+
+/// The local jump `[delta_s, delta_n] = A_q eps` of interface point `q` on the step kept
+/// in `linear`.
+fn point_jump(linear: &LinearBranch, q: usize, strain: &Strain) -> [f64; 2] {
+    let a = &linear.jumps[JUMP_OPERATOR_LEN * q..JUMP_OPERATOR_LEN * (q + 1)];
+    let component = |c: &[f32]| {
+        f64::from(c[0]) * strain[0] + f64::from(c[1]) * strain[1] + f64::from(c[2]) * strain[2]
+    };
+    [component(&a[..3]), component(&a[3..])]
+}
+
+/// The step's integration error estimate `eta` (after Oliver, Huespe & Cante 2008: the
+/// extrapolated history against the implicit one the step's converged jumps imply): the
+/// largest relative traction error over the interface points,
+/// ```text
+/// eta = max_q |t_ex,q - t_q| / max(|t_ex,q| + |t_q|, t_c),   t_ex,q = S(h_ex, c_n) delta_q,   t_q = S(h_{n+1}, c_n) delta_q
+/// ```
+/// with `S` the frozen secant of the law ([`InterfaceLaw::frozen_secant`](crate::interface::InterfaceLaw::frozen_secant)),
+/// `h_ex` the step's extrapolated history, `c_n` the contact status it held, `h_{n+1}` the
+/// implicit history [`finish_step`] formed into `trial`, and
+/// `delta_q` the point's converged jump, `t_c` the law's strength
+/// ([`InterfaceLaw::traction_scale`](crate::interface::InterfaceLaw::traction_scale)). `t_ex,q` is the traction the step answered with,
+/// `t_q` the one the paper's law gives at the same jump. In `[0, 1]`; for the cohesive law
+/// `eta ~ (h_{n+1} - h_ex) / (2 delta_c)` at an opening point; the floor `t_c` keeps a
+/// point with tiny tractions from counting as a 100 % error. The contact status is the
+/// held one on both sides: a status that the step's jumps contradict is IMPL-EX's other
+/// lag, but with a stiff penalty it flips back and forth at any step size (measured in
+/// `docs/step_control.md`), so it cannot steer the step. The largest over the points,
+/// not an energy-weighted mean: a crack starts at a few points, whose weight in the RVE's
+/// energy is small while they decide the snap-back (`docs/step_control.md` measures both).
+/// 0 without an interface law. Allocates nothing.
+pub fn error_estimate(problem: &Problem, committed: &State, trial: &State, ratio: f64, strain: &Strain) -> f64 {
+    let Some(law) = problem.disc.law.as_deref() else {
+        return 0.0;
+    };
+    let disc = problem.disc;
+    let (hl, np) = (law.history_len(), disc.points_per_interface());
+    let previous = if committed.implex.previous.len() == committed.history.len() {
+        &committed.implex.previous
+    } else {
+        &committed.history
+    };
+    // Every law with a frozen branch keeps one value per point (the cohesive law's delta_max).
+    let mut extrapolated = [0.0; 16];
+    let h_ex = &mut extrapolated[..hl];
+    let (mut error, scale): (f64, f64) = (0.0, law.traction_scale());
+    for q in 0..disc.interface_points() {
+        let range = q * hl..(q + 1) * hl;
+        law.extrapolate(&committed.history[range.clone()], &previous[range.clone()], ratio, h_ex);
+        let length = disc.interfaces[q / np].length;
+        let closed = committed.implex.is_closed(q);
+        let explicit = law.frozen_secant(h_ex, closed, length);
+        let implicit = law.frozen_secant(&trial.history[range], closed, length);
+        let (Some(explicit), Some(implicit)) = (explicit, implicit) else {
+            return 0.0;
+        };
+        let jump = nalgebra::Vector2::from(point_jump(&trial.linear, q, strain));
+        let (t_ex, t) = (explicit * jump, implicit * jump);
+        let difference = (t_ex - t).norm();
+        if difference > 0.0 {
+            error = error.max(difference / (t_ex.norm() + t.norm()).max(scale));
+        }
+    }
+    error
 }
 
 /// The fluctuation of a converged state from its history and contact status alone: with

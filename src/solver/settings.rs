@@ -61,6 +61,13 @@ pub struct Settings {
     /// ask for a smaller step, `PNEWDT` 0.5). `false` skips the check (see `step_check`).
     #[serde(default = "yes")]
     pub step_check: bool,
+    /// The integration error an IMPL-EX step may make, relative (see
+    /// [`super::implex::error_estimate`] and `docs/step_control.md`): each update then
+    /// estimates its error and suggests a step ratio, below 1 to redo the step smaller
+    /// (`PNEWDT`, `RveInfo`), above 1 when the next step may be larger (`RveInfo`, the
+    /// batch report; never `PNEWDT`). Absent (the default): no estimate, ratio 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step_tolerance: Option<f64>,
 }
 
 impl Default for Settings {
@@ -78,6 +85,7 @@ impl Default for Settings {
             fast_path: true,
             integration: Integration::Implicit,
             step_check: true,
+            step_tolerance: None,
         }
     }
 }
@@ -146,7 +154,7 @@ pub enum TangentRequest {
 }
 
 /// Counters of one update.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct IncrementReport {
     /// Newton corrections summed over sub-steps.
     pub iterations: u32,
@@ -185,6 +193,13 @@ pub struct IncrementReport {
     pub step_too_large: bool,
     /// Factorizations of that check, not counted in `factorizations`.
     pub check_factorizations: u32,
+    /// The step's integration error estimate relative to `solver.step_tolerance`
+    /// (`eta / tol`, see [`super::implex::error_estimate`]); `None` without a tolerance.
+    pub error_estimate: Option<f64>,
+    /// The estimate exceeds the tolerance but did not fall when the host redid the step
+    /// smaller (see `model::Instance`): the error is not the step's (the RVE snaps back
+    /// through it at any step), so the ratio is 1, not a further cut.
+    pub irreducible: bool,
 }
 
 /// How an update was answered.
@@ -201,20 +216,61 @@ pub enum Answer {
 }
 
 impl IncrementReport {
-    /// The ratio of the next macro increment to this one that the update suggests (UMAT's
-    /// `PNEWDT`): 1, or 1/2 when the answer depends on the step (`step_too_large`).
+    /// The ratio of the next macro increment to this one that the update suggests: 1/2
+    /// when the answer depends on the step (`step_too_large`), the step control's ratio
+    /// ([`step_ratio_for`]) under `solver.step_tolerance`, else 1. Below 1: redo this
+    /// increment smaller (UMAT's `PNEWDT`); above 1: the next may be that much larger.
     pub fn suggested_step_ratio(&self) -> f64 {
         if self.step_too_large {
             0.5
+        } else if self.irreducible {
+            1.0
+        } else if let Some(e) = self.error_estimate {
+            step_ratio_for(e)
         } else {
             1.0
         }
     }
 
+    /// Whether the step's error estimate exceeds `solver.step_tolerance`.
+    pub fn exceeds_tolerance(&self) -> bool {
+        self.error_estimate.is_some_and(|e| e > 1.0)
+    }
+
     /// Whether the answer is less reliable than a plain converged increment: it needed
-    /// sub-steps, or it depends on the step (`step_too_large`). MGIS-style reliability.
+    /// sub-steps, it depends on the step (`step_too_large`), or its error estimate exceeds
+    /// `solver.step_tolerance`. MGIS-style reliability.
     pub fn substepped(&self) -> bool {
-        self.substeps > 1 || self.step_too_large
+        self.substeps > 1 || self.step_too_large || self.exceeds_tolerance()
+    }
+}
+
+/// Smallest ratio the step control asks for: a step whose error is far beyond the
+/// tolerance is redone at a tenth, then judged again.
+pub const MIN_STEP_RATIO: f64 = 0.1;
+/// Largest ratio the step control offers: the next step at most twice this one.
+pub const MAX_STEP_RATIO: f64 = 2.0;
+/// Safety factor of the step control's ratio.
+const STEP_SAFETY: f64 = 0.9;
+
+/// The step control's ratio for an error estimate `e = eta / tol` (see `docs/step_control.md`).
+/// IMPL-EX's error in a step is the extrapolation's, of second order in the step where
+/// the history grows smoothly, so the step that meets the tolerance is `sqrt(1/e)` times
+/// this one:
+/// ```text
+/// e > 1:   r = clamp(0.9 sqrt(1/e), 0.1, 0.9)   (redo smaller)
+/// e <= 1:  r = min(0.9 sqrt(1/e), 2) if that exceeds 1, else 1   (keep; grow when well below)
+/// ```
+pub fn step_ratio_for(e: f64) -> f64 {
+    let r = if e > 0.0 {
+        STEP_SAFETY / e.sqrt()
+    } else {
+        MAX_STEP_RATIO
+    };
+    if e > 1.0 {
+        r.clamp(MIN_STEP_RATIO, STEP_SAFETY)
+    } else {
+        r.clamp(1.0, MAX_STEP_RATIO)
     }
 }
 
