@@ -582,7 +582,6 @@ pub struct PenaltySpec {
     pub stiffness: Option<f64>,
 }
 
-
 impl InterfaceLawSpec for ItzSpec {
     fn validate(&self, key: &str) -> Result<()> {
         let named = |constant: &str| format!("materials.{key}.{constant}");

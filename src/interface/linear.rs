@@ -66,11 +66,16 @@ pub struct LinearItzSpec {
     pub normal_stiffness: f64,
 }
 
-
 impl InterfaceLawSpec for LinearItzSpec {
     fn validate(&self, key: &str) -> Result<()> {
-        require_positive(&format!("materials.{key}.shear_stiffness"), self.shear_stiffness)?;
-        require_positive(&format!("materials.{key}.normal_stiffness"), self.normal_stiffness)
+        require_positive(
+            &format!("materials.{key}.shear_stiffness"),
+            self.shear_stiffness,
+        )?;
+        require_positive(
+            &format!("materials.{key}.normal_stiffness"),
+            self.normal_stiffness,
+        )
     }
 
     fn build(&self, _contact: bool) -> Arc<dyn InterfaceLaw> {
