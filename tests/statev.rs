@@ -13,7 +13,7 @@
 
 mod common;
 
-use rve::host::{Hypothesis, SearchPath, Umat, UmatCall, UmatOutputs};
+use rve::host::{SearchPath, Umat, UmatOutputs};
 use rve::model::cache;
 
 const UNTOUCHED: f64 = 7.0;
@@ -84,20 +84,7 @@ fn try_call(
 ) -> Called {
     let dstran: Vec<f64> = strain.iter().zip(start).map(|(e, s)| e - s).collect();
     let (mut stress, mut ddsdde, mut pnewdt) = (vec![UNTOUCHED; 3], vec![0.0; 9], 1.0);
-    let time = 0.1 * k as f64;
-    let c = UmatCall {
-        cmname,
-        props: &[],
-        hypothesis: Hypothesis::PlaneStress,
-        stran: start,
-        dstran: &dstran,
-        time: [time, time],
-        dtime: 0.1,
-        noel,
-        npt: 1,
-        kstep: 1,
-        kinc: k as i32 + 1,
-    };
+    let c = common::cycle_call(cmname, &[], start, &dstran, noel, k);
     let mut outputs = UmatOutputs {
         stress: &mut stress,
         ddsdde: &mut ddsdde,

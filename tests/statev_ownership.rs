@@ -13,7 +13,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use rve::host::{Hypothesis, SearchPath, Umat, UmatCall, UmatOutputs};
+use rve::host::{SearchPath, Umat, UmatOutputs};
 
 const UNTOUCHED: f64 = 7.0;
 
@@ -65,20 +65,7 @@ impl Host {
         let dstran: Vec<f64> = (0..3).map(|c| end[c] - start[c]).collect();
         let (mut stress, mut ddsdde, mut pnewdt) = (vec![UNTOUCHED; 3], vec![0.0; 9], 1e36);
         let mut statev = statev.to_vec();
-        let time = 0.1 * k as f64;
-        let c = UmatCall {
-            cmname: &self.cmname,
-            props: &self.props,
-            hypothesis: Hypothesis::PlaneStress,
-            stran: &start,
-            dstran: &dstran,
-            time: [time, time],
-            dtime: 0.1,
-            noel,
-            npt: 1,
-            kstep: 1,
-            kinc: k as i32 + 1,
-        };
+        let c = common::cycle_call(&self.cmname, &self.props, &start, &dstran, noel, k);
         let mut out = UmatOutputs {
             stress: &mut stress,
             ddsdde: &mut ddsdde,

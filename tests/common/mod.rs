@@ -35,3 +35,29 @@ pub fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
         / scale
 }
+
+/// A plane-stress UMAT call of the paper's cycle as the STATEV tests make it: increment `k`
+/// (`KINC` = k + 1, `KSTEP` 1) of point (`noel`, 1), `TIME(2)` = 0.1 k, `DTIME` = 0.1.
+pub fn cycle_call<'a>(
+    cmname: &'a str,
+    props: &'a [f64],
+    stran: &'a [f64],
+    dstran: &'a [f64],
+    noel: i32,
+    k: usize,
+) -> rve::host::UmatCall<'a> {
+    let time = 0.1 * k as f64;
+    rve::host::UmatCall {
+        cmname,
+        props,
+        hypothesis: rve::host::Hypothesis::PlaneStress,
+        stran,
+        dstran,
+        time: [time, time],
+        dtime: 0.1,
+        noel,
+        npt: 1,
+        kstep: 1,
+        kinc: k as i32 + 1,
+    }
+}
