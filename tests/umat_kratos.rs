@@ -69,14 +69,32 @@ fn two_calls_per_iteration_solve_once_and_give_the_pnewdt_hosts_answers() {
         let tangent_call = call(&kratos, HostSignal::NanStress, 0, k, &kept);
         let r = call(&reference, HostSignal::Pnewdt, 1, k, &kept_ref);
         assert!(!r.failed && !stress_call.failed, "increment {k}");
-        assert_eq!(bits(&stress_call.stress), bits(&tangent_call.stress), "increment {k}");
-        assert_eq!(bits(&stress_call.ddsdde), bits(&r.ddsdde), "increment {k}: DDSDDE");
+        assert_eq!(
+            bits(&stress_call.stress),
+            bits(&tangent_call.stress),
+            "increment {k}"
+        );
+        assert_eq!(
+            bits(&stress_call.ddsdde),
+            bits(&r.ddsdde),
+            "increment {k}: DDSDDE"
+        );
         if r.pnewdt > 0.0 && r.pnewdt < 1.0 {
             nan_steps += 1;
-            assert!(stress_call.stress.iter().all(|s| s.is_nan()), "increment {k}");
+            assert!(
+                stress_call.stress.iter().all(|s| s.is_nan()),
+                "increment {k}"
+            );
         } else {
-            assert_eq!(bits(&stress_call.stress), bits(&r.stress), "increment {k}: STRESS");
-            assert_eq!(stress_call.pnewdt, 0.0, "no request: the caller's PNEWDT stays 0");
+            assert_eq!(
+                bits(&stress_call.stress),
+                bits(&r.stress),
+                "increment {k}: STRESS"
+            );
+            assert_eq!(
+                stress_call.pnewdt, 0.0,
+                "no request: the caller's PNEWDT stays 0"
+            );
         }
         kept = tangent_call.statev;
         kept_ref = r.statev;
@@ -84,7 +102,10 @@ fn two_calls_per_iteration_solve_once_and_give_the_pnewdt_hosts_answers() {
     let stats = kratos.stats();
     println!("{nan_steps} NaN increments of {INCREMENTS}; {stats:?}");
     assert_eq!(stats.calls, 2 * INCREMENTS as u64);
-    assert_eq!(stats.repeats, INCREMENTS as u64, "each tangent call repeats its stress call");
+    assert_eq!(
+        stats.repeats, INCREMENTS as u64,
+        "each tangent call repeats its stress call"
+    );
     assert_eq!(stats.points, 0, "STATEV mode puts no point in the table");
     assert_eq!(stats.failures, 0);
 }

@@ -246,17 +246,20 @@ impl Args {
             },
             pnewdt,
         };
-        global().call_as(&call, &mut outputs, signal).map(|_| ()).map_err(|f| {
-            *reported = true;
-            if f.first_report {
-                print_once(&f.error.to_string(), &format!("mesorve UMAT: {f}"));
-            }
-            Failure {
-                status: RveStatus::from(&*f.error),
-                message: f.to_string(),
-                step_ratio: Some(f.pnewdt),
-            }
-        })
+        global()
+            .call_as(&call, &mut outputs, signal)
+            .map(|_| ())
+            .map_err(|f| {
+                *reported = true;
+                if f.first_report {
+                    print_once(&f.error.to_string(), &format!("mesorve UMAT: {f}"));
+                }
+                Failure {
+                    status: RveStatus::from(&*f.error),
+                    message: f.to_string(),
+                    step_ratio: Some(f.pnewdt),
+                }
+            })
     }
 }
 
@@ -508,6 +511,8 @@ mod tests {
         assert_eq!(printable(b"CONCRETE  "), "CONCRETE  ");
         assert_eq!(printable(b"A\x9c\n\x1b[2J"), "A\\x9c\\x0a\\x1b[2J");
         assert_eq!(printable(b"AB\0garbage\xff"), "AB");
-        assert!(printable(&[0x80, 0xfe, 0x07]).chars().all(|c| c.is_ascii_graphic()));
+        assert!(printable(&[0x80, 0xfe, 0x07])
+            .chars()
+            .all(|c| c.is_ascii_graphic()));
     }
 }

@@ -957,7 +957,10 @@ fn slot_material(table: u64, c: &UmatCall) -> Option<Arc<Material>> {
     SLOTS
         .try_with(|slots| {
             let slots = slots.borrow();
-            let found = slots.1.iter().find(|s| s.table == table && s.point.key.matches(c));
+            let found = slots
+                .1
+                .iter()
+                .find(|s| s.table == table && s.point.key.matches(c));
             found.map(|s| s.point.material.clone())
         })
         .ok()
@@ -969,8 +972,11 @@ fn slot_material(table: u64, c: &UmatCall) -> Option<Arc<Material>> {
 /// caller puts it back with [`put_slot`]; a panic in between drops it.
 fn take_slot(table: u64, material: &Arc<Material>, statev: &[f64]) -> Option<Point> {
     let holds = |kept: &Option<Vec<f64>>| {
-        kept.as_ref()
-            .is_some_and(|k| k.iter().map(|v| v.to_bits()).eq(statev.iter().map(|v| v.to_bits())))
+        kept.as_ref().is_some_and(|k| {
+            k.iter()
+                .map(|v| v.to_bits())
+                .eq(statev.iter().map(|v| v.to_bits()))
+        })
     };
     SLOTS
         .try_with(|slots| {
