@@ -38,8 +38,8 @@
 //! `PROPS`, see [`super::material`]) and creates a virgin instance of its model; the
 //! instance lives in the table until the process ends. When `NSTATV` allows, the
 //! mirrors (`STATEV(1:5)` in table mode, after the state in `STATEV` mode) receive the
-//! point's id in the table (1, 2, ... in creation order; 0 in `STATEV` mode, which keys no
-//! point), the RVE's Newton iterations,
+//! point's id in the table (1, 2, ... in creation order; in `STATEV` mode the id of the
+//! thread's instance that answered, which points with the same `STATEV` share), the RVE's Newton iterations,
 //! its sub-steps, its damage and its largest ITZ opening ([`super::mirrors`]), for
 //! inspection; the library never reads them.
 //!
@@ -635,7 +635,10 @@ impl Umat {
     ) -> Result<Outcome, Failed> {
         let n = material.model.statev_len();
         let mut p = take_slot(self.id, &material, &out.statev[..n])
-            .unwrap_or_else(|| Point::new(0, MaterialKey::of(c), material.clone()));
+            .unwrap_or_else(|| {
+                let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+                Point::new(id, MaterialKey::of(c), material.clone())
+            });
         let timed = signal == HostSignal::Pnewdt;
         let result = self
             .statev_answer(&mut p, c, &out.statev[..n], timed)
