@@ -99,6 +99,70 @@ fn a_bad_tolerance_is_refused() {
         let message = e.to_string();
         assert!(message.contains("solver.step_tolerance"), "{message}");
     }
+    for (text, what) in [
+        (
+            implex_text("step_tolerance = 0.01\nsmallest_step = 0.0\n"),
+            "positive",
+        ),
+        (
+            implex_text("smallest_step = 1e-6\n"),
+            "needs solver.step_tolerance",
+        ),
+    ] {
+        let e = Scene::from_toml_str(&text, common::repo("scenes"))
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {what}"));
+        let message = e.to_string();
+        assert!(
+            message.contains("solver.smallest_step") && message.contains(what),
+            "{message}"
+        );
+    }
+}
+
+/// `solver.smallest_step` is the control's floor: `rve run` following the ratio on §5.2.1
+/// never steps below it except to land on a path point, keeps every step at the floor
+/// whatever its estimate (ratio 1), and so takes fewer steps through the snap-back than
+/// without it (where it goes down to 1/1024 of the path's increment).
+#[test]
+fn the_smallest_step_is_the_controls_floor() {
+    let dir = std::env::temp_dir().join(format!("mesorve-step-floor-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let increment = 2.2e-4 / 20.0;
+    let floor = increment / 16.0;
+    let without = rve_run(&dir, "without", &implex_text("step_tolerance = 0.01\n"));
+    let with = rve_run(
+        &dir,
+        "with",
+        &implex_text(&format!(
+            "step_tolerance = 0.01\nsmallest_step = {floor:e}\n"
+        )),
+    );
+    let (mut previous, mut at_floor) = (0.0, 0);
+    for (e, _, [estimate, ratio]) in &with {
+        let step = e[0] - previous;
+        previous = e[0];
+        let on_path_point = ((e[0] / increment).round() * increment - e[0]).abs() < 1e-12;
+        assert!(
+            step >= floor * (1.0 - 1e-9) || on_path_point,
+            "{step:e} below the floor at {e:?}"
+        );
+        if *estimate > 1.0 {
+            assert!(
+                step <= floor * (1.0 + 1e-9) && *ratio == 1.0 || on_path_point,
+                "{e:?}: {estimate} {ratio}"
+            );
+            at_floor += 1;
+        }
+    }
+    eprintln!(
+        "{} steps with the floor, {} without; {at_floor} kept above the tolerance at it",
+        with.len(),
+        without.len()
+    );
+    assert!(at_floor > 0, "the snap-back never reached the floor");
+    assert!(with.len() < without.len());
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// (strain, stress, [error estimate, step ratio]) of a row of `response.csv`.
