@@ -122,8 +122,8 @@ def scaled_deck(text, scale):
     """The deck with every *STATIC line's increments `scale` times finer and fixed."""
     def fine(m):
         initial = float(m.group(1)) / scale
-        return f"{initial:.8g}, {m.group(2)}, {initial / 100:.3g}, {initial:.8g}"
-    text = re.sub(r"(?m)^([0-9.e-]+), ([0-9.]+), [0-9.e-]+, [0-9.e-]+$", fine, text)
+        return f"*STATIC\n{initial:.8g}, {m.group(2)}, {initial / 100:.3g}, {initial:.8g}"
+    text = re.sub(r"(?m)^\*STATIC\n([0-9.e-]+), ([0-9.]+), [0-9.e-]+, [0-9.e-]+$", fine, text)
     return re.sub(r"(?m)^\*STEP, INC=\d+", "*STEP, INC=100000", text)
 
 
