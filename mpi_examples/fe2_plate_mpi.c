@@ -37,9 +37,9 @@
  *     that rank (rve_init_file: the scene is meshed once per process, the instances of a
  *     rank share that model); instances never leave their rank;
  *   - each Newton iteration rank 0 broadcasts the macro displacement, every rank updates
- *     its own instances (rve_update_batch, `-t` threads per rank) and sends back stress and
- *     tangent per point (MPI_Gatherv, global point order); rank 0 assembles in point order
- *     and solves. The assembly order, and so every floating-point sum, is independent of
+ *     its own instances (rve_update_batch_timed, `-t` threads per rank) and sends back
+ *     stress and tangent per point (MPI_Gatherv, global point order); rank 0 assembles in
+ *     point order and solves. The assembly order, and so every floating-point sum, is independent of
  *     the rank count: the results are bit-identical for any P;
  *   - a converged increment is committed by every rank on its own instances.
  * Nothing of the library crosses ranks: only strains (as the displacement) go out and
