@@ -166,12 +166,18 @@ fn the_report_carries_the_error_estimate() {
             let r = alone[p]
                 .update_timed(strains[p], 1.0, &mut ws, TangentRequest::Consistent)
                 .unwrap();
-            let estimate = r.report.error_estimate.expect("an estimate under step_tolerance");
+            let estimate = r
+                .report
+                .error_estimate
+                .expect("an estimate under step_tolerance");
             assert_eq!(out.reports[p].error_estimate.to_bits(), estimate.to_bits());
             largest = largest.max(estimate);
             smallest_ratio = smallest_ratio.min(out.reports[p].suggested_step_ratio);
         }
-        points.iter_mut().chain(&mut alone).for_each(|i| i.commit().unwrap());
+        points
+            .iter_mut()
+            .chain(&mut alone)
+            .for_each(|i| i.commit().unwrap());
     }
     assert!(
         largest > 1.0 && smallest_ratio < 1.0,
