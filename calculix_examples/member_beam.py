@@ -13,7 +13,11 @@ integrated by IMPL-EX (concrete_implex.toml, STATEV mode: *DEPVAR = its umat_nst
 holding down as well as up. The load: the top node at mid-span (node set LOAD) moved in
 y, down to -UMAX in N increments, back to 0 in N, up to +UMAX in N (defaults 24, 12, 24,
 UMAX = 0.12 mm): increment k of the whole path (1, 2, ..., down + back + up) ends at its
-own prescribed displacement. ccx's automatic incrementation, never above those steps.
+own prescribed displacement, at time k. ccx's automatic incrementation, never above those
+steps. Every increment has the same time increment (DTIME = 1, each step's time period is
+its number of increments): IMPL-EX extrapolates the RVE's history by the ratio of the
+increment's DTIME to the last one's (src/solver/implex.rs), so a step whose increments
+had another DTIME would extrapolate further or less at its first increment.
 
 Stages: the increments K (default: down / 3, down, and the last) at which ccx prints every
 point's state variables (*EL PRINT SDV, with the points' coordinates, COORD) to the
@@ -23,7 +27,7 @@ increment is a step of its own (ccx prints a step's every increment); the other 
 print the stresses of the two bottom elements at mid-span (element set EMID), which also
 cancels the previous step's SDV request. Splitting the path into steps changes nothing
 else: the prescribed displacement is ramped linearly within each step from where the last
-one ended, and every increment is the same size.
+one ended, and every increment has the same displacement and time increment.
 """
 import argparse
 
@@ -81,8 +85,7 @@ def steps(a):
 
 
 def step(u, n, stage):
-    dt = 1.0 / n
-    out = ["*STEP, INC=1000", "*STATIC", f"{dt!r}, 1., {1e-4 * dt:.6g}, {dt!r}",
+    out = ["*STEP, INC=1000", "*STATIC", f"1., {n}., 1e-4, 1.",
            "*BOUNDARY", f"LOAD, 2, 2, {u + 0.0!r}",
            "*NODE PRINT, NSET=LOAD, TOTALS=ONLY", "RF", "*NODE PRINT, NSET=LOAD", "U"]
     out += ["*EL PRINT, ELSET=EALL", "SDV, COORD"] if stage else ["*EL PRINT, ELSET=EMID", "S"]

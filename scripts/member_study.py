@@ -55,9 +55,11 @@ DAMAGE, OPENING = DEPVAR - 2, DEPVAR - 1  # 0-based: SDV 794 and 795
 HEADER = re.compile(r"\s*(?:total )?(.+?) \(.*\) for set (\w+) and time\s+(\S+)")
 # The checks' thresholds (scripts/test-member; docs/structure.md gives the measured values).
 # The force at the largest downward displacement must be below the elastic force (the
-# first increment's stiffness times the displacement) by at least SOFTER: cracking, not
-# round-off, must show in the member's curve.
-SOFTER = 0.05
+# first increment's stiffness times the displacement) by at least SOFTER: four times the
+# force residual ccx's convergence criterion leaves (0.5 % of the average force), so a
+# member that stayed elastic cannot pass (docs/structure.md: 0.96 in the short version,
+# 0.91-0.92 in the full ones).
+SOFTER = 0.02
 # IMPL-EX unloads every RVE on its secant through the origin (eq. 24): at U = 0 the host's
 # exact solution is F = 0; ccx's second iteration leaves round-off (1e-16 of the peak in
 # the specimens of docs/calculix.md). calculix_report.py's ZERO_FORCE, same reason.
