@@ -215,8 +215,10 @@ def damage_svg(path, panels, top):
         o.append(f'<text x="{left}" y="{y0 + 12}">{title}</text>')
         for corners, d in cells:
             (xa, ya), (xb, yb) = corners[0], corners[2]
-            o.append(f'<rect class="point" x="{left + xa * scale:.1f}" y="{y0 + 20 + (100 - yb) * scale:.1f}" '
-                     f'width="{(xb - xa) * scale:.1f}" height="{(yb - ya) * scale:.1f}" fill="{shade(d, top)}"/>')
+            x, y, w, h = (round(v, 1) for v in (left + xa * scale, y0 + 20 + (100 - yb) * scale,
+                                                (xb - xa) * scale, (yb - ya) * scale))
+            o.append(f'<rect class="point" x="{x:g}" y="{y:g}" width="{w:g}" height="{h:g}" '
+                     f'fill="{shade(d, top)}"/>')
         o.append(f'<rect x="{left}" y="{y0 + 20}" width="{400 * scale}" height="{100 * scale}" '
                  'fill="none" stroke="#333"/>')
     yb = height - 24
