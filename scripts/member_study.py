@@ -365,8 +365,10 @@ def time_v(path):
     out = {}
     with open(path) as f:
         for line in f:
-            if ":" in line:
-                k, v = line.rsplit(":", 1) if "Elapsed" not in line else line.split("): ", 1)
+            if line.strip().startswith("Elapsed"):
+                out["Elapsed"] = line.rsplit(": ", 1)[1].strip()
+            elif ":" in line:
+                k, v = line.rsplit(":", 1)
                 out[k.strip()] = v.strip()
     return out
 
@@ -380,14 +382,14 @@ def seconds(clock):
 
 def table(specs):
     print("| run | threads | RVE points | increments (cut back) | ccx iterations | wall time | "
-          "peak memory | CPU time | RVE CPU time | RVE share |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "CPU the run got | peak memory | CPU time | RVE CPU time | RVE share | RVE per point and increment |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for spec in specs:
         label, rest = spec.split("=", 1)
         job, threads = rest.rsplit(":", 1)
         tv = time_v(job + ".time")
         cpu = float(tv["User time (seconds)"]) + float(tv["System time (seconds)"])
-        wall = seconds(tv["Elapsed (wall clock) time (h"])
+        wall = seconds(tv["Elapsed"])
         rve, points = 0.0, set()
         with open(job + ".times.csv") as f:
             for row in csv.reader(f):
@@ -396,8 +398,10 @@ def table(specs):
         rows = sta(job)
         done = sum(1 for r in rows if r[3])
         print(f"| {label} | {threads} | {len(points)} | {done} ({len(rows) - done}) | "
-              f"{sum(r[4] for r in rows)} | {wall:.1f} s | {int(tv['Maximum resident set size (kbytes)']) / 1024:.0f} MiB | "
-              f"{cpu:.1f} s | {rve:.1f} s | {100 * rve / cpu:.0f} % |")
+              f"{sum(r[4] for r in rows)} | {wall:.1f} s | {tv['Percent of CPU this job got']} | "
+              f"{int(tv['Maximum resident set size (kbytes)']) / 1024:.0f} MiB | "
+              f"{cpu:.1f} s | {rve:.1f} s | {100 * rve / cpu:.0f} % | "
+              f"{1e3 * rve / (len(points) * done):.2f} ms |")
 
 
 def compare(a, b):
