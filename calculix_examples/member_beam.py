@@ -6,8 +6,9 @@ stdout (calculix_examples/member_beam_h10.inp and member_beam_h5.inp are this sc
   member_beam.py [--size H] [--down N] [--back N] [--up N] [--umax U] [--stages K,K,K]
 
 A plane-strain beam 400 mm long and 100 mm deep (thickness 1 mm, ccx's default) of CPE4
-elements of H x H mm (H divides 100; default 10, the RVE's size: 400 elements, 1600 RVE
-points; 5: 1600 elements, 6400 points), every integration point the paper's RVE
+elements of H x H mm (H divides 100; default 10, the RVE's size: 400 elements, 3200 RVE
+points; 5: 1600 elements, 12800 points: ccx runs a CPE4 as a C3D8 one element thick, with
+8 integration points, two layers of 4 with the same strain), every point the paper's RVE
 integrated by IMPL-EX (concrete_implex.toml, STATEV mode: *DEPVAR = its umat_nstatv 790
 + 5 mirrors). Supports at the bottom corners (left: ux = uy = 0; right: uy = 0), both
 holding down as well as up. The load: the top node at mid-span (node set LOAD) moved in
@@ -99,12 +100,13 @@ def header(a, n):
         f" --down {a.down} --back {a.back} --up {a.up} --umax {a.umax:g}"
         f" --stages {','.join(map(str, a.stages))}.",
         f"** A plain-concrete beam 400 x 100 mm in plane strain, {n} CPE4 elements of {size} x {size} mm",
-        f"** ({4 * n} RVE points), the paper's ITZ law integrated by IMPL-EX (concrete_implex.toml,",
-        "** STATEV mode). Reversed three-point bending: supports at the bottom corners, the top",
-        f"** node at mid-span (LOAD) moved down to -{a.umax:g} mm in {a.down} increments, back to 0 in",
-        f"** {a.back}, up to +{a.umax:g} mm in {a.up}. Every point's state variables printed at the",
-        "** stage increments (steps of one increment). Run with LD_LIBRARY_PATH holding libRVE.so",
-        "** (librve.so) and MESORVE_SCENE_PATH=calculix_examples: calculix_examples/member.md.",
+        f"** ({8 * n} RVE points: ccx's CPE4 has 8, two layers of 4), the paper's ITZ law integrated",
+        "** by IMPL-EX (concrete_implex.toml, STATEV mode). Reversed three-point bending: supports",
+        f"** at the bottom corners, the top node at mid-span (LOAD) moved down to -{a.umax:g} mm in {a.down}",
+        f"** increments, back to 0 in {a.back}, up to +{a.umax:g} mm in {a.up}, DTIME = 1 throughout. Every point's",
+        "** state variables printed at the stage increments (steps of one increment). Run with",
+        "** LD_LIBRARY_PATH holding libRVE.so (librve.so) and MESORVE_SCENE_PATH=calculix_examples:",
+        "** calculix_examples/member.md.",
         "*HEADING",
         "mesorve RVE at every integration point: concrete beam in reversed three-point bending",
     ]
