@@ -11,8 +11,9 @@
  *   one   rve_update_batch_timed on the calling thread (nthreads 1);
  *   two   rve_update_batch_timed on a pool of 2 threads;
  * and every increment, stresses, tangents (bit for bit) and reports (status, iterations,
- * sub-steps, factorizations, reliability, suggested step ratio, s_zz; shared_from and
- * error_estimate 0) of the three must agree, every message being "".
+ * sub-steps, factorizations, reliability, suggested step ratio, s_zz; shared_from 0, and
+ * error_estimate 0 as the scene sets no step_tolerance) of the three must agree, every
+ * message being "".
  * Then, on the committed states: a batch with a point at a NaN strain (BATCH_FAILED, its
  * status, report and message; the message as rve_update_timed's for that point, and
  * truncated in a short buffer; the other points' outputs written, the failed one's not),

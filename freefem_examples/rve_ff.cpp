@@ -31,6 +31,12 @@
 //          DT[k] of each point (rve_update_timed: IMPL-EX scales its extrapolation by
 //          DT[k] / the DT of the committed increment; DT[k] <= 0: none, as rveUpdate),
 //          17 arrays of equal length
+//   real   rveStepRatio()   the smallest suggested_step_ratio of the points of the last
+//          successful rveUpdateTimed (RvePointReport / RveInfo): < 1 redo the increment
+//          that much smaller, > 1 (only under solver.step_tolerance) the next may be that
+//          much larger; 1 before any timed update
+//   real   rveErrorEstimate()   the largest error_estimate of those points (IMPL-EX's
+//          estimate over solver.step_tolerance; 0 without a tolerance)
 //   long   rveStress(H, exx, eyy, gxy, sxx, syy, sxy)   trial update, stress only
 //   long   rveFastUpdates(H, real[int] N)   N is resized to n and receives each point's
 //          updates answered without a solve (rve_fast_updates: the fast path's answers and,
@@ -64,6 +70,9 @@ namespace {
 // Message of the last failure of an rve* FreeFEM function (the library keeps its own per
 // thread; this one also covers the plugin's own argument checks).
 string g_last_error;
+// Over the points of the last successful timed update: the smallest suggested step ratio
+// and the largest error estimate (rveStepRatio, rveErrorEstimate).
+double g_step_ratio = 1.0, g_error_estimate = 0.0;
 
 long fail(const string &where, uint32_t st, const string &detail) {
   ostringstream m;
@@ -151,33 +160,59 @@ long rve_ff_init_text(string *const &toml, string *const &base, const long &n,
 }
 
 // ---- rveUpdate / rveUpdateElastic / rveStress / rveUpdateTimed -------------------------
-// Every point's trial update, statuses[k] its status. Without times (dt NULL) one
-// rve_update_batch call on this thread (nthreads = 1: the host may be parallel itself, and
-// results do not depend on nthreads). With times rve_update_timed point by point (there is
-// no timed batch call); every point is attempted, as the batch call does. Returns the
-// batch's status: OK, BATCH_FAILED (detail: the first failed point's message, as the batch
-// call leaves it) or a status of the batch call itself.
-uint32_t update_points(const vector<RveHandle> &hs, const double *dt, const double *strain,
-                       double *stress, double *tangent, uint32_t *statuses, int32_t request,
-                       string *detail) {
+// Every point's trial update, statuses[k] its status, on this thread (nthreads = 1: the
+// host may be parallel itself, and results do not depend on nthreads). Without times (dt
+// NULL) one rve_update_batch call. With times equal at every point (a host increment) one
+// rve_update_batch_timed call, whose reports give each point's suggested step ratio and
+// error estimate; with different times rve_update_timed point by point (its RveInfo
+// gives the ratio; every point is attempted, as the batch call does). Returns the
+// status: OK, BATCH_FAILED (detail: the first failed point's message) or a status of the
+// call itself. A timed update that succeeds sets g_step_ratio and g_error_estimate.
+uint32_t update_timed_points(const vector<RveHandle> &hs, const double *dt,
+                             const double *strain, double *stress, double *tangent,
+                             uint32_t *statuses, int32_t request, string *detail) {
   const size_t n = hs.size();
-  if (!dt) {
-    uint32_t st = rve_update_batch(hs.data(), n, strain, stress, tangent, statuses, request, 1);
-    if (st != RVE_STATUS_OK) *detail = library_error();
-    return st;
-  }
+  double ratio = 1.0, estimate = 0.0;
   uint32_t st = RVE_STATUS_OK;
-  for (size_t k = 0; k < n; k++) {
-    statuses[k] = rve_update_timed(hs[k], strain + 3 * k, dt[k], stress + 3 * k,
-                                   tangent ? tangent + 9 * k : nullptr, request, nullptr);
-    if (statuses[k] != RVE_STATUS_OK && st == RVE_STATUS_OK) {
-      st = RVE_STATUS_BATCH_FAILED;
-      *detail = "item " + to_string(k) + ": " + library_error();
+  bool same = true;
+  for (size_t k = 1; k < n; k++) same = same && dt[k] == dt[0];
+  if (same) {
+    vector<RvePointReport> reports(n);
+    st = rve_update_batch_timed(hs.data(), n, strain, n ? dt[0] : 0.0, stress, tangent,
+                                request, reports.data(), nullptr, 0, 1);
+    if (st != RVE_STATUS_OK) *detail = library_error();
+    for (size_t k = 0; k < n; k++) {
+      statuses[k] = st == RVE_STATUS_OK || st == RVE_STATUS_BATCH_FAILED ? reports[k].status : st;
+      ratio = k ? fmin(ratio, reports[k].suggested_step_ratio) : reports[k].suggested_step_ratio;
+      estimate = fmax(estimate, reports[k].error_estimate);
     }
+  } else {
+    for (size_t k = 0; k < n; k++) {
+      RveInfo info = {};
+      statuses[k] = rve_update_timed(hs[k], strain + 3 * k, dt[k], stress + 3 * k,
+                                     tangent ? tangent + 9 * k : nullptr, request, &info);
+      ratio = k ? fmin(ratio, info.suggested_step_ratio) : info.suggested_step_ratio;
+      if (statuses[k] != RVE_STATUS_OK && st == RVE_STATUS_OK) {
+        st = RVE_STATUS_BATCH_FAILED;
+        *detail = "item " + to_string(k) + ": " + library_error();
+      }
+    }
+  }
+  if (st == RVE_STATUS_OK) {
+    g_step_ratio = n ? ratio : 1.0;
+    g_error_estimate = estimate;
   }
   return st;
 }
-
+uint32_t update_points(const vector<RveHandle> &hs, const double *dt, const double *strain,
+                       double *stress, double *tangent, uint32_t *statuses, int32_t request,
+                       string *detail) {
+  if (dt) return update_timed_points(hs, dt, strain, stress, tangent, statuses, request, detail);
+  uint32_t st = rve_update_batch(hs.data(), hs.size(), strain, stress, tangent, statuses,
+                                 request, 1);
+  if (st != RVE_STATUS_OK) *detail = library_error();
+  return st;
+}
 // args: H [, DT], exx, eyy, gxy, sxx, syy, sxy [, d11, ..., d33]
 long update_all(const string &where, KN<double> *const *a, int nargs, int32_t request,
                 bool timed) {
@@ -330,6 +365,8 @@ long rve_ff_free(KN<double> *const &H) { return each<rve_free, true>("rveFree", 
 // ---- strings -------------------------------------------------------------------------
 // A FreeFEM function of no argument returning the string Get() gives (copied).
 const char *last_error_text() { return g_last_error.c_str(); }
+double step_ratio() { return g_step_ratio; }
+double error_estimate() { return g_error_estimate; }
 template <const char *(*Get)()>
 class StringOf : public E_F0mps {
  public:
@@ -382,6 +419,8 @@ static void Load_Init() {
   Global.Add("rveRevert", "(", new OneOperator1_<long, KN<double> *>(rve_ff_revert));
   Global.Add("rveFree", "(", new OneOperator1_<long, KN<double> *>(rve_ff_free));
   Global.Add("rveLastError", "(", new OneOperatorCode<StringOf<last_error_text>>());
+  Global.Add("rveStepRatio", "(", new OneOperator0<double>(step_ratio));
+  Global.Add("rveErrorEstimate", "(", new OneOperator0<double>(error_estimate));
   Global.Add("rveVersion", "(", new OneOperatorCode<StringOf<rve_version>>());
   Global.Add("rveStatusMessage", "(", new OneOperatorCode<StatusMessage>());
 }

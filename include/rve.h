@@ -129,8 +129,8 @@ typedef struct RvePointReport {
   // < 1: redo the increment smaller; > 1: the next may be larger; 1 otherwise (on a
   // failure: the solver's suggestion, 1 for a failure a smaller step does not mend).
   double suggested_step_ratio;
-  // The integration error estimate relative to the step tolerance (0 when none is
-  // estimated; always 0 in this version).
+  // The IMPL-EX step's integration error estimate relative to the step tolerance
+  // (`solver.step_tolerance`; above 1 the step exceeds it), 0 when none is estimated.
   double error_estimate;
   // Out-of-plane stress `s_zz` (as `RveInfo`).
   double s_zz;
@@ -193,7 +193,9 @@ uint32_t rve_update_batch(const RveHandle *handles,
 //
 // - `reports`: `n` entries or NULL. Entry `k` receives point `k`'s status, its
 //   iterations, sub-steps, factorizations, reliability, `suggested_step_ratio` and
-//   `s_zz` (as `RveInfo`); `shared_from` and `error_estimate` are 0 in this version.
+//   `s_zz` (as `RveInfo`), and `error_estimate`: the IMPL-EX step's error estimate
+//   relative to `solver.step_tolerance` (0 without one); `shared_from` is 0 in this
+//   version.
 // - `messages`: `n` buffers of `message_len` bytes each, point `k`'s at
 //   `messages + k * message_len`: its failure's message, NUL-terminated and truncated
 //   to `message_len - 1` bytes, or "" for a point that succeeded; or NULL (then

@@ -17,17 +17,29 @@
  * every RVE is linear within an increment with a symmetric positive definite tangent, so
  * the plate goes past its peak (-e 4e-4 -n 16: the reaction falls from 51.0 to 41.4 N)
  * with one Newton correction per increment, and the banded LU below needs no pivoting
- * there either. rve_update_batch passes no time increment: each increment counts as long
- * as the last, which is exact for these equal increments (rve_update_timed takes one).
+ * there either. The points are updated by rve_update_batch_timed with no time increment
+ * (dtime 0): each increment counts as long as the last, which is exact for these equal
+ * increments.
+ *
+ * Step control: with a scene that sets solver.step_tolerance (IMPL-EX; e.g.
+ * scenes/paper_rve_host_step_control.toml) the host follows the smallest
+ * suggested_step_ratio of all points (the batch call's RvePointReport, reduced over the
+ * ranks with MPI_MIN), the rule of c_examples/localize.c: a converged increment whose
+ * smallest ratio is below 1 is reverted (rve_revert) and redone that much smaller (not
+ * below 1/1024 of the nominal step), and the next one is the last times the ratio when
+ * that exceeds 1, up to the end of the nominal step (the NINC nominal steps are the
+ * largest). Each update then passes its increment's dU as its time increment. The
+ * increments are numbered as kept; stdout says how many were redone. Checkpoints (-c,
+ * -r) are refused with such a scene (the checkpoint holds no step length).
  *
  * Parallel layout (what a cluster host does):
  *   - rank r owns the points [r N / P, (r + 1) N / P) and their RVE instances, created on
  *     that rank (rve_init_file: the scene is meshed once per process, the instances of a
  *     rank share that model); instances never leave their rank;
  *   - each Newton iteration rank 0 broadcasts the macro displacement, every rank updates
- *     its own instances (rve_update_batch, `-t` threads per rank) and sends back stress and
- *     tangent per point (MPI_Gatherv, global point order); rank 0 assembles in point order
- *     and solves. The assembly order, and so every floating-point sum, is independent of
+ *     its own instances (rve_update_batch_timed, `-t` threads per rank) and sends back
+ *     stress and tangent per point (MPI_Gatherv, global point order); rank 0 assembles in
+ *     point order and solves. The assembly order, and so every floating-point sum, is independent of
  *     the rank count: the results are bit-identical for any P;
  *   - a converged increment is committed by every rank on its own instances.
  * Nothing of the library crosses ranks: only strains (as the displacement) go out and
@@ -204,6 +216,53 @@ static int band_solve(double *band, int n, int bw, double *r) {
 
 static double now(void) { return MPI_Wtime(); }
 
+/* Whether the scene file sets solver.step_tolerance (the host then follows the ratio). */
+static int follows_ratio(const char *scene) {
+    char line[512];
+    int found = 0;
+    FILE *f = fopen(scene, "r");
+    if (!f) fail("cannot read %s", scene);
+    while (!found && fgets(line, sizeof line, f))
+        found = strncmp(line, "step_tolerance", strlen("step_tolerance")) == 0;
+    fclose(f);
+    return found;
+}
+
+/* Trial-updates this rank's points over the time increment dtime (rve_update_batch_timed);
+ * aborts every rank on a failure. Returns the smallest suggested_step_ratio of all points
+ * of all ranks (MPI_MIN) when `reduce`, else 1. */
+static double update_points(const RveHandle *h, int count, const double *eps, double dtime,
+                            double *sig_tan, RvePointReport *reports, size_t nthreads,
+                            int inc, int reduce) {
+    double mine = INFINITY, all = 1.0;
+    int bad = 0, anybad = 0, e;
+    uint32_t st = rve_update_batch_timed(h, (size_t)count, eps, dtime, sig_tan,
+                                         sig_tan + 3 * (size_t)count,
+                                         RVE_TANGENT_REQUEST_CONSISTENT, reports, NULL, 0,
+                                         nthreads);
+    if (st != RVE_STATUS_OK && count > 0) {
+        char msg[512];
+        rve_last_error(msg, sizeof msg);
+        fprintf(stderr, "fe2_plate_mpi: rank %d: increment %d: rve_update_batch_timed: %s: %s\n",
+                rank, inc, rve_status_message(st), msg);
+        bad = 1;
+    }
+    MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    if (anybad) MPI_Abort(MPI_COMM_WORLD, 1);
+    if (!reduce) return 1.0;
+    for (e = 0; e < count; e++) mine = fmin(mine, reports[e].suggested_step_ratio);
+    MPI_Allreduce(&mine, &all, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+    return all;
+}
+
+/* Following the ratio: the next increment's length after one of length `taken` that was
+ * kept with the smallest ratio `ratio`, ending at the nominal step's end when `at_end`
+ * (a piece cut short by the step's end does not shorten the next). */
+static double next_length(double length, double taken, double ratio, int at_end) {
+    if (at_end && taken < length) return length;
+    return taken * (ratio > 1.0 ? ratio : 1.0);
+}
+
 /* Checkpoint files. macro.bin: magic, increment, nranks, nx, ny, ninc, u[ndof].
  * points.<r>.bin: magic, then per point: global index, byte count, state bytes. */
 static void write_checkpoint(const char *dir, const Mesh *m, int inc, int ninc,
@@ -300,16 +359,17 @@ static int read_checkpoint(const char *dir, const Mesh *m, int ninc, double *u, 
 int main(int argc, char **argv) {
     const char *scene = "scenes/paper_rve_host.toml", *out = "fe2_plate_mpi.csv";
     const char *ckpt_dir = NULL, *restart_dir = NULL;
-    int nx = 8, ny = 4, ninc = 8, stop_after = -1, verbose = 0, i, inc, inc0 = 0;
-    double epsend = 1.6e-4;
+    int nx = 8, ny = 4, ninc = 8, stop_after = -1, verbose = 0, i, inc, inc0 = 0, s;
+    int follow, redos = 0;
+    double epsend = 1.6e-4, done = 0.0, length = 0.0, min_ratio = INFINITY;
     size_t nthreads = 1;
     Mesh m;
     int first, count, *counts, *displs;
     RveHandle *h;
-    double *u, *du, *eps, *sig_tan, *all = NULL, *band = NULL, *res = NULL;
+    double *u, *du, *u_save, *eps, *sig_tan, *all = NULL, *band = NULL, *res = NULL;
     double t_start, t_rve = 0.0, t_init;
     long updates = 0; /* this rank's instance updates */
-    uint32_t *statuses;
+    RvePointReport *reports;
     FILE *csv = NULL;
 
     MPI_Init(&argc, &argv);
@@ -335,6 +395,10 @@ int main(int argc, char **argv) {
     if (nx < 1 || ny < 1 || ninc < 1 || nthreads < 1) fail("-x, -y, -n, -t must be >= 1%s", "");
     if ((ckpt_dir != NULL) != (stop_after >= 1) || stop_after > ninc)
         fail("-c DIR and -k K (1 <= K <= NINC) go together%s", "");
+    follow = follows_ratio(scene);
+    if (follow && (ckpt_dir || restart_dir))
+        fail("-c/-r: a run that follows the step ratio (%s sets solver.step_tolerance) cannot "
+             "be checkpointed", scene);
     make_mesh(&m, nx, ny);
     if (nranks > m.nelem) fail("more ranks than points%s", "");
 
@@ -359,9 +423,10 @@ int main(int argc, char **argv) {
 
     u = xmalloc(sizeof(double) * (size_t)m.ndof);
     du = xmalloc(sizeof(double) * (size_t)m.ndof);
+    u_save = xmalloc(sizeof(double) * (size_t)m.ndof);
     eps = xmalloc(sizeof(double) * 3 * (size_t)count);
     sig_tan = xmalloc(sizeof(double) * 12 * (size_t)count);
-    statuses = xmalloc(sizeof(uint32_t) * (size_t)count);
+    reports = xmalloc(sizeof(RvePointReport) * (size_t)count);
     memset(u, 0, sizeof(double) * (size_t)m.ndof);
     if (rank == 0) {
         all = xmalloc(sizeof(double) * 12 * (size_t)m.nelem);
@@ -375,39 +440,36 @@ int main(int argc, char **argv) {
         if (!restart_dir) fprintf(csv, "increment,U,reaction,iterations,residual\n");
     }
 
-    for (inc = inc0 + 1; inc <= ninc; inc++) {
-        double U = epsend * LX * inc / ninc, r_prev = HUGE_VAL, reaction = 0.0, r = 0.0;
-        int it, converged = 0, n;
+    inc = inc0; /* kept increments */
+    s = inc0 + 1; /* the nominal step */
+    while (s <= ninc) {
+        double target = epsend * LX * s / ninc, nominal = epsend * LX / ninc;
+        double U = target, r_prev = HUGE_VAL, reaction = 0.0, r = 0.0, ratio = 1.0;
+        int it, converged = 0, n, last;
+        if (follow && length > 0.0 && target - done > length * (1 + 1e-9)) U = done + length;
+        inc++;
+        memcpy(u_save, u, sizeof(double) * (size_t)m.ndof);
         /* Predictor: the last converged field scaled to the new U (linear at the start). */
         for (n = 0; n < m.nnode; n++) {
+            double scale = follow ? U / done : (double)inc / (inc - 1);
             if (inc == 1) {
                 u[2 * n] = U * m.x[n] / LX;
                 u[2 * n + 1] = 0.0;
             } else {
-                u[2 * n] *= (double)inc / (inc - 1);
-                u[2 * n + 1] *= (double)inc / (inc - 1);
+                u[2 * n] *= scale;
+                u[2 * n + 1] *= scale;
             }
         }
         for (it = 0; it <= MAXIT; it++) {
-            uint32_t st;
-            int e, bad = 0, anybad = 0;
+            int e;
             double t0;
             MPI_Bcast(u, m.ndof, MPI_DOUBLE, 0, MPI_COMM_WORLD);
             for (e = 0; e < count; e++) element_strain(&m, first + e, u, &eps[3 * e]);
             t0 = now();
             updates += count;
-            st = rve_update_batch(h, (size_t)count, eps, sig_tan, sig_tan + 3 * (size_t)count,
-                                  statuses, RVE_TANGENT_REQUEST_CONSISTENT, nthreads);
+            ratio = update_points(h, count, eps, follow ? U - done : 0.0, sig_tan, reports,
+                                  nthreads, inc, follow);
             t_rve += now() - t0;
-            if (st != RVE_STATUS_OK && count > 0) {
-                char msg[512];
-                rve_last_error(msg, sizeof msg);
-                fprintf(stderr, "fe2_plate_mpi: rank %d: increment %d: rve_update_batch: %s: %s\n",
-                        rank, inc, rve_status_message(st), msg);
-                bad = 1;
-            }
-            MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-            if (anybad) MPI_Abort(MPI_COMM_WORLD, 1);
             /* Pack [stress(3), tangent(9)] per point for the gather in global order. */
             {
                 double *packed = xmalloc(sizeof(double) * 12 * (size_t)count);
@@ -476,12 +538,31 @@ int main(int argc, char **argv) {
                         inc, MAXIT);
             MPI_Abort(MPI_COMM_WORLD, 2);
         }
+        if (follow) {
+            double taken = U - done;
+            min_ratio = fmin(min_ratio, ratio);
+            if (ratio < 1.0 && taken > nominal / 1024.0 * (1 + 1e-9)) { /* redo smaller */
+                for (i = 0; i < count; i++) {
+                    uint32_t st = rve_revert(h[i]);
+                    if (st != RVE_STATUS_OK) die("rve_revert", st);
+                }
+                memcpy(u, u_save, sizeof(double) * (size_t)m.ndof);
+                length = fmax(taken * ratio, nominal / 1024.0);
+                redos++;
+                inc--;
+                continue;
+            }
+            length = next_length(length, taken, ratio, U == target);
+        }
+        last = U == target && s == ninc;
+        done = U;
+        if (U == target) s++;
         for (i = 0; i < count; i++) {
             uint32_t st = rve_commit(h[i]);
             if (st != RVE_STATUS_OK) die("rve_commit", st);
         }
         if (rank == 0) fprintf(csv, "%d,%.17g,%.17g,%d,%.17g\n", inc, U, reaction, it, r);
-        if (inc == ninc && rank == 0) {
+        if (last && rank == 0) {
             int e;
             fprintf(csv, "point,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy\n");
             for (e = 0; e < m.nelem; e++) {
@@ -515,7 +596,10 @@ int main(int argc, char **argv) {
         MPI_Gather(mine, 7, MPI_DOUBLE, every, 7, MPI_DOUBLE, 0, MPI_COMM_WORLD);
         if (rank == 0) {
             printf("ranks %d, points %d, increments %d..%d, threads per rank %zu\n", nranks,
-                   m.nelem, inc0 + 1, stop_after > 0 ? stop_after : ninc, nthreads);
+                   m.nelem, inc0 + 1, stop_after > 0 ? stop_after : inc, nthreads);
+            if (follow)
+                printf("step control: %d increments kept, %d redone smaller, smallest ratio "
+                       "%.4g\n", inc, redos, min_ratio);
             printf("rank  points  wall_s  init_s  rve_s   cpu_s  peak_rss_MiB  updates  fast\n");
             for (i = 0; i < nranks; i++)
                 printf("%4d  %6d  %6.2f  %6.2f  %5.2f  %6.2f  %12.1f  %7.0f  %4.0f\n", i,
@@ -525,7 +609,8 @@ int main(int argc, char **argv) {
         }
     }
     for (i = 0; i < count; i++) rve_free(h[i]);
-    free(h), free(u), free(du), free(eps), free(sig_tan), free(statuses), free(all), free(band);
+    free(h), free(u), free(du), free(u_save), free(eps), free(sig_tan), free(reports), free(all);
+    free(band);
     free(res), free(counts), free(displs), free(m.tri), free(m.x), free(m.y), free(m.fixed);
     MPI_Finalize();
     return 0;

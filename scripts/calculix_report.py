@@ -55,6 +55,16 @@
       force falls after its peak by at least DROP while U grows, the band stretches and
       the sound rows contract (unload).
 
+  calculix_report.py control JOB PLAIN SMALLEST
+      The tension (step 1) of a cycle deck under solver.step_tolerance with
+      solver.smallest_step = SMALLEST, against the same deck's plain run PLAIN: one line of
+      figures. Exit status 1 unless the step finished, the UMAT asked for a cut at least
+      once (PNEWDT), every attempt ccx cut was redone smaller (the UMAT never hands it a
+      PNEWDT of 1 or more, which ccx would redo at the same size), ccx grew the increment
+      again after a cut (its own rule), no increment but the step's last is below
+      SMALLEST, and the peak force is at least 5 % below the plain run's (which lands the
+      crack late: +11.6 % against 16x its increments, docs/step_control.md).
+
   calculix_report.py snap REFERENCE.csv LABEL=JOB:EXPECT ...
       specimen_snap.inp's runs (one element pulled in one step through the RVE's
       snap-back) against `rve run` of the same path in 100 increments (REFERENCE.csv, its
@@ -494,6 +504,42 @@ def snap(reference_csv, runs):
         sys.exit("\n".join(f"calculix_report.py snap: {m}" for m in failures))
 
 
+
+def control_failures(attempts, smallest):
+    """What the step-1 attempts [(inc, converged, size)] of a controlled run break."""
+    failures, grew, cut_seen = [], False, False
+    for (inc, ok, size), (_, _, after) in zip(attempts, attempts[1:]):
+        if not ok and after >= size:
+            failures.append(f"increment {inc} was cut but redone at {after:g} >= {size:g}")
+        grew = grew or (cut_seen and ok and after > size * (1 + 1e-9))
+        cut_seen = cut_seen or not ok
+    if not grew:
+        failures.append("ccx never grew the increment after a cut")
+    below = [s for _, ok, s in attempts[:-1] if s < smallest * (1 - 1e-6)]
+    if below:
+        failures.append(f"{len(below)} increments below smallest_step {smallest:g}: {below[:3]}")
+    return failures
+
+
+def control(job, plain, smallest):
+    attempts = [(inc, ok, size) for step, inc, _, ok, _, size in sta(job) if step == 1]
+    tension, plain_tension = phases(curve(job))[0], phases(curve(plain))[0]
+    with open(job + ".log") as f:
+        cuts = f.read().count(PNEWDT_CUT)
+    peak, plain_peak = max(p[2] for p in tension), max(p[2] for p in plain_tension)
+    failures = control_failures(attempts, smallest)
+    if tension[-1][0] < 1 - 1e-9:
+        failures.append(f"the tension stopped at time {tension[-1][0]:g}")
+    if cuts < 1:
+        failures.append("no PNEWDT cut")
+    if peak > 0.95 * plain_peak:
+        failures.append(f"peak {peak:.2f} N is not 5 % below the plain run's {plain_peak:.2f} N")
+    print(f"{len(tension)} increments ({cuts} attempts cut on PNEWDT), smallest "
+          f"{min(s for _, ok, s in attempts if ok):g} (floor {smallest:g}); peak {peak:.2f} N "
+          f"against the plain run's {plain_peak:.2f} N ({100 * (peak / plain_peak - 1):+.1f} %)")
+    if failures:
+        sys.exit("calculix_report.py control: " + "; ".join(failures))
+
 if __name__ == "__main__":
     if sys.argv[1] == "homogeneous":
         homogeneous(sys.argv[2], sys.argv[3])
@@ -512,6 +558,8 @@ if __name__ == "__main__":
         runs = [tuple(a.split("=", 1)) for a in sys.argv[2:]]
         {"curves": curves, "ligament": ligament, "rvetime": rvetime, "hostits": hostits,
          "factorizations": factorizations}[sys.argv[1]](runs)
+    elif sys.argv[1] == "control":
+        control(sys.argv[2], sys.argv[3], float(sys.argv[4]))
     elif sys.argv[1] == "band":
         band(sys.argv[2])
     elif sys.argv[1] == "snap":

@@ -33,6 +33,9 @@ import study_provenance  # noqa: E402
 LEVELS = (1, 2, 4, 8)  # IMPL-EX at m N increments
 IMPLICIT_LEVELS = (1, 2, 4, 8, 16)  # the last one is the reference
 HARD_SEEDS = tuple(range(10))
+# IMPL-EX under solver.step_tolerance (docs/step_control.md), the path's own increments as
+# the largest step: runs keyed ("control", round(1e4 * tolerance)).
+CONTROL_TOLERANCES = (0.03, 0.01, 0.003)
 # What the page's numbers depend on: a change there uncommitted is named on the page.
 INPUTS = ("src", "build.rs", "Cargo.toml", "Cargo.lock", "scenes", "tests/common/hard_paths.rs",
           "scripts/implex_study.py", "scripts/accuracy_study.py")
@@ -49,12 +52,14 @@ class StrainPath:
         self.note = note
         self.n = sum(n for _, n in segments)
 
-    def scene(self, m, integration):
+    def scene(self, m, integration, step_tolerance=None):
         """The scene text with every segment cut m times finer."""
         text = re.sub(r"(?m)^\s*integration\s*=.*\n", "", self.text)
         if "[solver]" not in text:
             text += "\n[solver]\n"
         text = text.replace("[solver]", '[solver]\nintegration = "%s"' % integration, 1)
+        if step_tolerance is not None:
+            text = text.replace("[solver]", "[solver]\nstep_tolerance = %g" % step_tolerance, 1)
         for to, n in self.segments:
             text += "\n[[path]]\nto = [%s]\nincrements = %d\n" % (
                 ", ".join(repr(float(v)) for v in to), n * m)
@@ -166,6 +171,12 @@ def run_path(R, p):
             with open(base, "w") as f:
                 f.write(p.scene(m, integration))
             runs[integration, m] = R.run(name, base, {})
+    for tol in CONTROL_TOLERANCES:
+        name = "%s_control_%g" % (slug, tol)
+        base = os.path.join(R.tmp, name + ".base.toml")
+        with open(base, "w") as f:
+            f.write(p.scene(1, "implex", tol))
+        runs["control", round(1e4 * tol)] = R.run(name, base, {})
     return runs
 
 
@@ -269,8 +280,33 @@ def measure(runs):
     for (integration, m), v in runs.items():
         if v is ref or v["failed"] or ref["failed"]:
             continue
+        if integration == "control":
+            v["err"] = interpolated_errors(v["rows"], ref["rows"])
+            continue
         v["err"] = errors(v["rows"], ref["rows"], IMPLICIT_LEVELS[-1] // m)
     return ref
+
+
+def interpolated_errors(rows, ref):
+    """`errors`' stress L1, stress max and energy of a run whose strain points are not
+    the reference's (the step control's): the reference's stress interpolated linearly in
+    arc length at each of the run's points (both follow the same piecewise-linear path)."""
+    scale = max(norm([r[k] for k in SIG]) for r in ref)
+    s, steps = arc(rows)
+    s_ref, _ = arc(ref)
+    ds, j = [], 0
+    for x, r in zip(s, rows):
+        while j < len(ref) - 1 and s_ref[j] < x:
+            j += 1
+        a, b = (ref[j - 1], ref[j]) if j > 0 else ({k: 0.0 for k in SIG}, ref[0])
+        s0 = s_ref[j - 1] if j > 0 else 0.0
+        w = (x - s0) / (s_ref[j] - s0) if s_ref[j] > s0 else 1.0
+        w = min(max(w, 0.0), 1.0)
+        ds.append(norm([r[k] - (a[k] + w * (b[k] - a[k])) for k in SIG]))
+    d_ref = dissipated(ref)
+    return {"l1": sum(d * h for d, h in zip(ds, steps)) / (s[-1] * scale),
+            "max": max(ds) / scale, "energy": abs(dissipated(rows) - d_ref) / d_ref,
+            "energy_signed": (dissipated(rows) - d_ref) / d_ref}
 
 
 def order(a, b, key):
@@ -733,6 +769,45 @@ def step_summary(results):
                                     for _, r in results), len(results)))
 
 
+def control_table(results, md):
+    """Per family and tolerance: the largest errors over the family's paths and the
+    cost; then the loosest tolerance that keeps every path of a family within a bound."""
+    fams = []
+    for p, _ in results:
+        if p.family not in fams:
+            fams.append(p.family)
+    md.append("| family | step_tolerance | increments (of N) | stress L1 %, largest | "
+              "stress max %, largest | energy %, largest (signed) |")
+    md.append("|---|---|---|---|---|---|")
+    for fam in fams:
+        rs = [(p, r) for p, r in results if p.family == fam]
+        for tol in CONTROL_TOLERANCES:
+            vs = [r["control", round(1e4 * tol)] for _, r in rs]
+            if any("err" not in v for v in vs):
+                md.append("| %s | %g | failed | | | |" % (fam, tol))
+                continue
+            incs = [len(v["rows"]) / p.n for (p, _), v in zip(rs, vs)]
+            worst = max(vs, key=lambda v: v["err"]["energy"])
+            md.append("| %s | %g | %s | %s | %s | %s (%+.1f) |" % (
+                fam, tol, "%.1fN" % incs[0] if len(incs) == 1 else
+                "%.1fN ... %.1fN" % (min(incs), max(incs)),
+                pc(max(v["err"]["l1"] for v in vs)), pc(max(v["err"]["max"] for v in vs)),
+                pc(worst["err"]["energy"]), 100 * worst["err"]["energy_signed"]))
+    md.append("")
+    md.append("| loosest step_tolerance within | %s |" % " | ".join(fams))
+    md.append("|---|" + "---|" * len(fams))
+    for key, name in (("l1", "stress L1"), ("max", "stress max"), ("energy", "energy")):
+        for bound in (0.01, 0.02, 0.05):
+            cells = []
+            for fam in fams:
+                ok = [tol for tol in CONTROL_TOLERANCES
+                      if all("err" in r["control", round(1e4 * tol)] and
+                             r["control", round(1e4 * tol)]["err"][key] <= bound
+                             for p, r in results if p.family == fam)]
+                cells.append("%g" % max(ok) if ok else "not at %g" % min(CONTROL_TOLERANCES))
+            md.append("| %s %g %% | %s |" % (name, 100 * bound, " | ".join(cells)))
+
+
 def findings(results, rows):
     hard = [(p, r) for p, r in results if p.family == "hard cases"]
     md = ["## Findings\n",
@@ -748,7 +823,15 @@ def findings(results, rows):
           "kept its error within the bound, and the coarsest such level; *not at 8N*: some "
           "run at 8N or finer misses it.\n"]
     step_table(results, md)
-    return md + ["", step_summary(results), ""]
+    md += ["", step_summary(results), "",
+           "**With the step control** (`solver.step_tolerance`, docs/step_control.md): IMPL-EX "
+           "from the path's own N increments as the largest step, `rve run` redoing a step "
+           "whose suggested ratio is below 1 and growing it again (down to 1/1024 of the "
+           "path's increment); errors against the same reference, interpolated at the run's "
+           "own points. The largest errors over each family's paths, and the loosest "
+           "tolerance measured that keeps every path of the family within a bound:\n"]
+    control_table(results, md)
+    return md + [""]
 
 
 # ---------------------------------------------------------------- main

@@ -2,7 +2,8 @@
 //! path past the peak with non-uniform time increments; each increment through
 //! `update_batch` on 1 and on 2 threads and through `Instance::update_timed` one by one
 //! must give the same stresses, tangents and reports, bit for bit; a point at a NaN strain
-//! fails alone, named by its index, with its outputs untouched.
+//! fails alone, named by its index, with its outputs untouched. Under
+//! `solver.step_tolerance` each point reports its IMPL-EX error estimate.
 
 use std::sync::Arc;
 
@@ -11,12 +12,13 @@ use rve::{Error, Instance, Model, Scene, TangentRequest};
 
 const N: usize = 5;
 
+const SCENE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scenes/paper_rve_host_implex.toml"
+);
+
 fn model() -> Arc<Model> {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/scenes/paper_rve_host_implex.toml"
-    );
-    Arc::new(Model::from_scene(&Scene::from_file(path).unwrap()).unwrap())
+    Arc::new(Model::from_scene(&Scene::from_file(SCENE).unwrap()).unwrap())
 }
 
 /// Point `p`'s strain at position `along` of the path (past the peak for the last points).
@@ -74,6 +76,7 @@ fn batch_equals_point_by_point_on_any_thread_count() {
                 .update_timed(strains[p], dt, &mut ws, TangentRequest::Consistent)
                 .unwrap();
             let report = PointReport::from_response(&r);
+            assert_eq!(report.error_estimate, 0.0, "no step_tolerance: no estimate");
             for o in [&one, &two] {
                 assert_eq!(o.stresses[p].map(f64::to_bits), r.stress.map(f64::to_bits));
                 assert_eq!(o.tangents[p].map(f64::to_bits), r.tangent.map(f64::to_bits));
@@ -139,4 +142,46 @@ fn a_failing_point_fails_alone() {
     };
     let e = update_batch(&mut points, &strains, bad_dt, out).unwrap_err();
     assert!(matches!(e, Error::HostConvention(_)), "{e:?}");
+}
+
+/// With `step_tolerance`, every point's `error_estimate` is its update's estimate
+/// (`eta / tol`), and the points past the peak at the path's coarse steps exceed the
+/// tolerance, with a ratio below 1; without it the estimate is 0 (the first test).
+#[test]
+fn the_report_carries_the_error_estimate() {
+    let text = std::fs::read_to_string(SCENE).unwrap().replace(
+        "integration = \"implex\"\n",
+        "integration = \"implex\"\nstep_tolerance = 0.01\n",
+    );
+    let scene = Scene::from_toml_str(&text, env!("CARGO_MANIFEST_DIR")).unwrap();
+    let model = Arc::new(Model::from_scene(&scene).unwrap());
+    let mut points: Vec<Instance> = (0..N).map(|_| Instance::new(model.clone())).collect();
+    let mut alone: Vec<Instance> = (0..N).map(|_| Instance::new(model.clone())).collect();
+    let mut ws = model.workspace();
+    let (mut largest, mut smallest_ratio) = (0.0f64, f64::INFINITY);
+    for s in 1..=8 {
+        let strains: Vec<[f64; 3]> = (0..N).map(|p| strain(3.0 * s as f64, p)).collect();
+        let out = batch(&mut points, &strains, 1.0, 2);
+        for p in 0..N {
+            let r = alone[p]
+                .update_timed(strains[p], 1.0, &mut ws, TangentRequest::Consistent)
+                .unwrap();
+            let estimate = r
+                .report
+                .error_estimate
+                .expect("an estimate under step_tolerance");
+            assert_eq!(out.reports[p].error_estimate.to_bits(), estimate.to_bits());
+            largest = largest.max(estimate);
+            smallest_ratio = smallest_ratio.min(out.reports[p].suggested_step_ratio);
+        }
+        points
+            .iter_mut()
+            .chain(&mut alone)
+            .for_each(|i| i.commit().unwrap());
+    }
+    assert!(
+        largest > 1.0 && smallest_ratio < 1.0,
+        "past the peak some point exceeds the tolerance: largest estimate {largest}, \
+         smallest ratio {smallest_ratio}"
+    );
 }

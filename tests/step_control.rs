@@ -99,6 +99,70 @@ fn a_bad_tolerance_is_refused() {
         let message = e.to_string();
         assert!(message.contains("solver.step_tolerance"), "{message}");
     }
+    for (text, what) in [
+        (
+            implex_text("step_tolerance = 0.01\nsmallest_step = 0.0\n"),
+            "positive",
+        ),
+        (
+            implex_text("smallest_step = 1e-6\n"),
+            "needs solver.step_tolerance",
+        ),
+    ] {
+        let e = Scene::from_toml_str(&text, common::repo("scenes"))
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {what}"));
+        let message = e.to_string();
+        assert!(
+            message.contains("solver.smallest_step") && message.contains(what),
+            "{message}"
+        );
+    }
+}
+
+/// `solver.smallest_step` is the control's floor: `rve run` following the ratio on §5.2.1
+/// never steps below it except to land on a path point, keeps every step at the floor
+/// whatever its estimate (ratio 1), and so takes fewer steps through the snap-back than
+/// without it (where it goes down to 1/1024 of the path's increment).
+#[test]
+fn the_smallest_step_is_the_controls_floor() {
+    let dir = std::env::temp_dir().join(format!("mesorve-step-floor-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let increment = 2.2e-4 / 20.0;
+    let floor = increment / 16.0;
+    let without = rve_run(&dir, "without", &implex_text("step_tolerance = 0.01\n"));
+    let with = rve_run(
+        &dir,
+        "with",
+        &implex_text(&format!(
+            "step_tolerance = 0.01\nsmallest_step = {floor:e}\n"
+        )),
+    );
+    let (mut previous, mut at_floor) = (0.0, 0);
+    for (e, _, [estimate, ratio]) in &with {
+        let step = e[0] - previous;
+        previous = e[0];
+        let on_path_point = ((e[0] / increment).round() * increment - e[0]).abs() < 1e-12;
+        assert!(
+            step >= floor * (1.0 - 1e-9) || on_path_point,
+            "{step:e} below the floor at {e:?}"
+        );
+        if *estimate > 1.0 {
+            assert!(
+                step <= floor * (1.0 + 1e-9) && *ratio == 1.0 || on_path_point,
+                "{e:?}: {estimate} {ratio}"
+            );
+            at_floor += 1;
+        }
+    }
+    eprintln!(
+        "{} steps with the floor, {} without; {at_floor} kept above the tolerance at it",
+        with.len(),
+        without.len()
+    );
+    assert!(at_floor > 0, "the snap-back never reached the floor");
+    assert!(with.len() < without.len());
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// (strain, stress, [error estimate, step ratio]) of a row of `response.csv`.
@@ -184,54 +248,84 @@ fn a_tighter_tolerance_gives_a_smaller_error_through_the_snap_back() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Through the UMAT, CalculiX's way (`PNEWDT` handed in as -1): the increments of the
-/// crack get `PNEWDT` in (0, 1), the others keep -1 (no request), and no call ever gets 1
-/// or more (ccx would redo the increment).
+/// Through the UMAT, CalculiX's way (`PNEWDT` handed in as -1, `DTIME` 0.05) on §5.2.1's
+/// first 20 increments with `extra` under `[solver]`: each call's `PNEWDT` on return.
+fn umat_pnewdts(extra: &str) -> Vec<f64> {
+    let dir = std::env::temp_dir().join(format!(
+        "mesorve-step-umat-{}-{}",
+        std::process::id(),
+        extra.len()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("paper.toml"), implex_text(extra)).unwrap();
+    let umat = Umat::new(SearchPath::new([dir.clone()]));
+    let mut start = [0.0; 3];
+    let pnewdts = (1..=20)
+        .map(|kinc| {
+            let strain = [1.1e-5 * f64::from(kinc), 0.0, 0.0];
+            let dstran: Vec<f64> = strain.iter().zip(&start).map(|(e, s)| e - s).collect();
+            let (mut stress, mut ddsdde, mut statev, mut pnewdt) =
+                ([0.0; 3], [0.0; 9], [0.0; 3], -1.0);
+            let call = UmatCall {
+                cmname: "PAPER",
+                props: &[],
+                hypothesis: Hypothesis::PlaneStress,
+                stran: &start,
+                dstran: &dstran,
+                time: [0.05 * f64::from(kinc - 1); 2],
+                dtime: 0.05,
+                noel: 1,
+                npt: 1,
+                kstep: 1,
+                kinc,
+            };
+            let outputs = &mut UmatOutputs {
+                stress: &mut stress,
+                ddsdde: &mut ddsdde,
+                statev: &mut statev,
+                pnewdt: &mut pnewdt,
+            };
+            umat.call(&call, outputs).unwrap();
+            start = strain;
+            pnewdt
+        })
+        .collect();
+    std::fs::remove_dir_all(&dir).ok();
+    pnewdts
+}
+
+/// The increments of the crack get `PNEWDT` in (0, 1), the others keep -1 (no request),
+/// and no call ever gets 1 or more (ccx would redo the increment). With
+/// `solver.smallest_step` the request is never below it (three quarters of `DTIME`
+/// here), and at `DTIME` itself there is none.
 #[test]
 fn the_ratio_reaches_the_umat_below_one_only() {
-    let dir = std::env::temp_dir().join(format!("mesorve-step-umat-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("paper.toml"),
-        implex_text("step_tolerance = 0.01\n"),
-    )
-    .unwrap();
-    let umat = Umat::new(SearchPath::new([dir.clone()]));
-    let (mut start, mut asked) = ([0.0; 3], 0);
-    for kinc in 1..=20 {
-        let strain = [1.1e-5 * f64::from(kinc), 0.0, 0.0];
-        let dstran: Vec<f64> = strain.iter().zip(&start).map(|(e, s)| e - s).collect();
-        let (mut stress, mut ddsdde, mut statev, mut pnewdt) = ([0.0; 3], [0.0; 9], [0.0; 3], -1.0);
-        let call = UmatCall {
-            cmname: "PAPER",
-            props: &[],
-            hypothesis: Hypothesis::PlaneStress,
-            stran: &start,
-            dstran: &dstran,
-            time: [0.05 * f64::from(kinc - 1); 2],
-            dtime: 0.05,
-            noel: 1,
-            npt: 1,
-            kstep: 1,
-            kinc,
-        };
-        let outputs = &mut UmatOutputs {
-            stress: &mut stress,
-            ddsdde: &mut ddsdde,
-            statev: &mut statev,
-            pnewdt: &mut pnewdt,
-        };
-        umat.call(&call, outputs).unwrap();
+    let pnewdts = umat_pnewdts("step_tolerance = 0.01\n");
+    for (kinc, pnewdt) in pnewdts.iter().enumerate() {
         assert!(
-            pnewdt == -1.0 || (pnewdt > 0.0 && pnewdt < 1.0),
-            "increment {kinc}: {pnewdt}"
+            *pnewdt == -1.0 || (*pnewdt > 0.0 && *pnewdt < 1.0),
+            "increment {}: {pnewdt}",
+            kinc + 1
         );
-        asked += usize::from(pnewdt > 0.0);
-        start = strain;
     }
+    let asked: Vec<usize> = (0..20).filter(|&k| pnewdts[k] > 0.0).collect();
     assert!(
-        asked > 0,
+        !asked.is_empty(),
         "no increment of the crack asked for a smaller step"
     );
-    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        asked.iter().any(|&k| pnewdts[k] < 0.75),
+        "no request below the floor to come"
+    );
+    let floored = umat_pnewdts("step_tolerance = 0.01\nsmallest_step = 0.0375\n");
+    for &k in &asked {
+        assert!(
+            floored[k] >= 0.75 - 1e-12 && floored[k] < 1.0,
+            "increment {}: {}",
+            k + 1,
+            floored[k]
+        );
+    }
+    let at_floor = umat_pnewdts("step_tolerance = 0.01\nsmallest_step = 0.05\n");
+    assert!(at_floor.iter().all(|&p| p == -1.0), "{at_floor:?}");
 }

@@ -260,7 +260,7 @@ impl Points {
     /// The last update's report, a dict of arrays of n: iterations, substeps,
     /// factorizations, reliability (0 failed, 1 reliable, 2 substepped),
     /// suggested_step_ratio (UMAT's PNEWDT), s_zz, fast (answered without a solve),
-    /// shared_from (-1: solved itself) and error_estimate (0: none estimated yet).
+    /// shared_from (-1: solved itself) and error_estimate (the IMPL-EX estimate over solver.step_tolerance; 0 without one).
     fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.reports;
         let d = PyDict::new(py);

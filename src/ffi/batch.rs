@@ -34,8 +34,8 @@ pub struct RvePointReport {
     /// < 1: redo the increment smaller; > 1: the next may be larger; 1 otherwise (on a
     /// failure: the solver's suggestion, 1 for a failure a smaller step does not mend).
     pub suggested_step_ratio: f64,
-    /// The integration error estimate relative to the step tolerance (0 when none is
-    /// estimated; always 0 in this version).
+    /// The IMPL-EX step's integration error estimate relative to the step tolerance
+    /// (`solver.step_tolerance`; above 1 the step exceeds it), 0 when none is estimated.
     pub error_estimate: f64,
     /// Out-of-plane stress `s_zz` (as `RveInfo`).
     pub s_zz: f64,
@@ -204,7 +204,9 @@ pub unsafe extern "C" fn rve_update_batch(
 ///
 /// - `reports`: `n` entries or NULL. Entry `k` receives point `k`'s status, its
 ///   iterations, sub-steps, factorizations, reliability, `suggested_step_ratio` and
-///   `s_zz` (as `RveInfo`); `shared_from` and `error_estimate` are 0 in this version.
+///   `s_zz` (as `RveInfo`), and `error_estimate`: the IMPL-EX step's error estimate
+///   relative to `solver.step_tolerance` (0 without one); `shared_from` is 0 in this
+///   version.
 /// - `messages`: `n` buffers of `message_len` bytes each, point `k`'s at
 ///   `messages + k * message_len`: its failure's message, NUL-terminated and truncated
 ///   to `message_len - 1` bytes, or "" for a point that succeeded; or NULL (then

@@ -461,8 +461,9 @@ fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
     let ratio = r.report.suggested_step_ratio();
     if r.report.exceeds_tolerance() && ratio < 1.0 {
         // At most half the increment: ccx allows few cut-backs of one increment (`*CONTROLS`,
-        // 5 by default), which ratios of 0.8 or 0.9 spend without reaching the tolerance.
-        let ratio = ratio.min(TOLERANCE_CUT);
+        // 5 by default), which ratios of 0.8 or 0.9 spend without reaching the tolerance;
+        // but not below `solver.smallest_step`, where ccx would grow back into a cut.
+        let ratio = ratio.min(TOLERANCE_CUT).max(r.report.smallest_ratio);
         request_step_ratio(out.pnewdt, ratio);
         TOLERANCE_NOTE.call_once(|| {
             eprintln!(

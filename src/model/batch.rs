@@ -50,8 +50,10 @@ pub struct PointReport {
     /// (UMAT's `PNEWDT`): < 1 redo smaller, 1 otherwise. On a failure it is the solver's
     /// suggestion, or 1 for a failure that a smaller step does not mend (a bad argument).
     pub suggested_step_ratio: f64,
-    /// The integration error estimate relative to the step tolerance; 0 when none is
-    /// estimated (always 0 for now).
+    /// The IMPL-EX step's integration error estimate relative to `solver.step_tolerance`
+    /// (`eta / tol`, see `crate::solver::implex::error_estimate`; above 1 the step
+    /// exceeds the tolerance); 0 when none is estimated (no `step_tolerance`, the implicit
+    /// scheme, a failed update).
     pub error_estimate: f64,
     /// Out-of-plane stress `s_zz` (plane strain; 0 in plane stress).
     pub s_zz: f64,
@@ -73,7 +75,7 @@ impl PointReport {
             },
             shared_from: None,
             suggested_step_ratio: r.report.suggested_step_ratio(),
-            error_estimate: 0.0,
+            error_estimate: r.report.error_estimate.unwrap_or(0.0),
             s_zz: r.s_zz,
             fast: r.report.answer.is_fast(),
         }

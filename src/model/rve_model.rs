@@ -312,6 +312,13 @@ impl Model {
             let ratio = implex::step_ratio(committed.implex.step, dt);
             let eta = implex::error_estimate(&problem, committed, trial, ratio, &strain);
             report.error_estimate = Some(eta / tolerance);
+            if let Some(smallest) = self.solver.smallest_step {
+                report.smallest_ratio = if dt > 0.0 {
+                    smallest / dt
+                } else {
+                    f64::INFINITY
+                };
+            }
         }
         Ok(Response {
             stress,

@@ -219,6 +219,15 @@ fn validate_solver(s: &SolverSpec) -> Result<()> {
             ));
         }
     }
+    if let Some(t) = s.smallest_step {
+        positive("solver.smallest_step", t)?;
+        if s.step_tolerance.is_none() {
+            return Err(Error::scene(
+                "solver.smallest_step",
+                "is the step control's floor: it needs solver.step_tolerance",
+            ));
+        }
+    }
     if s.max_substep_depth > 20 {
         return Err(Error::scene(
             "solver.max_substep_depth",

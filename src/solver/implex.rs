@@ -231,7 +231,13 @@ fn point_jump(linear: &LinearBranch, q: usize, strain: &Strain) -> [f64; 2] {
 /// not an energy-weighted mean: a crack starts at a few points, whose weight in the RVE's
 /// energy is small while they decide the snap-back (`docs/step_control.md` measures both).
 /// 0 without an interface law. Allocates nothing.
-pub fn error_estimate(problem: &Problem, committed: &State, trial: &State, ratio: f64, strain: &Strain) -> f64 {
+pub fn error_estimate(
+    problem: &Problem,
+    committed: &State,
+    trial: &State,
+    ratio: f64,
+    strain: &Strain,
+) -> f64 {
     let Some(law) = problem.disc.law.as_deref() else {
         return 0.0;
     };
@@ -248,7 +254,12 @@ pub fn error_estimate(problem: &Problem, committed: &State, trial: &State, ratio
     let (mut error, scale): (f64, f64) = (0.0, law.traction_scale());
     for q in 0..disc.interface_points() {
         let range = q * hl..(q + 1) * hl;
-        law.extrapolate(&committed.history[range.clone()], &previous[range.clone()], ratio, h_ex);
+        law.extrapolate(
+            &committed.history[range.clone()],
+            &previous[range.clone()],
+            ratio,
+            h_ex,
+        );
         let length = disc.interfaces[q / np].length;
         let closed = committed.implex.is_closed(q);
         let explicit = law.frozen_secant(h_ex, closed, length);

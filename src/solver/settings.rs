@@ -68,6 +68,13 @@ pub struct Settings {
     /// batch report; never `PNEWDT`). Absent (the default): no estimate, ratio 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub step_tolerance: Option<f64>,
+    /// The smallest time increment the step control asks for, in the host's time units
+    /// (`DTIME`, `dt`): a cut is never below it, and a step at or below it is kept (ratio 1)
+    /// whatever its estimate. Inside an RVE's snap-back the estimate does not fall with the
+    /// step, and a host that halves down to its own minimum stops there (CalculiX's
+    /// "increment size smaller than minimum"); see `docs/step_control.md`. Absent: no floor.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smallest_step: Option<f64>,
 }
 
 impl Default for Settings {
@@ -86,6 +93,7 @@ impl Default for Settings {
             integration: Integration::Implicit,
             step_check: true,
             step_tolerance: None,
+            smallest_step: None,
         }
     }
 }
@@ -200,6 +208,9 @@ pub struct IncrementReport {
     /// smaller (see `model::Instance`): the error is not the step's (the RVE snaps back
     /// through it at any step), so the ratio is 1, not a further cut.
     pub irreducible: bool,
+    /// `solver.smallest_step / dt`: the step control does not cut below it, and keeps a step
+    /// for which it is 1 or more; 0 without `solver.smallest_step`.
+    pub smallest_ratio: f64,
 }
 
 /// How an update was answered.
@@ -218,7 +229,8 @@ pub enum Answer {
 impl IncrementReport {
     /// The ratio of the next macro increment to this one that the update suggests: 1/2
     /// when the answer depends on the step (`step_too_large`), the step control's ratio
-    /// ([`step_ratio_for`]) under `solver.step_tolerance`, else 1. Below 1: redo this
+    /// ([`step_ratio_for`], not below `smallest_ratio`, 1 at it) under
+    /// `solver.step_tolerance`, else 1. Below 1: redo this
     /// increment smaller (UMAT's `PNEWDT`); above 1: the next may be that much larger.
     pub fn suggested_step_ratio(&self) -> f64 {
         if self.step_too_large {
@@ -226,7 +238,14 @@ impl IncrementReport {
         } else if self.irreducible {
             1.0
         } else if let Some(e) = self.error_estimate {
-            step_ratio_for(e)
+            let ratio = step_ratio_for(e);
+            if ratio >= 1.0 {
+                ratio
+            } else if self.smallest_ratio >= 1.0 - 1e-9 {
+                1.0
+            } else {
+                ratio.max(self.smallest_ratio)
+            }
         } else {
             1.0
         }

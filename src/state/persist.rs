@@ -447,7 +447,10 @@ mod tests {
         assert!(!loaded.linear.valid);
         let last = bytes.len() - 1;
         bytes[last] ^= 1;
-        assert!(matches!(decode(&bytes, SIZES, FP), Err(Error::BadState { .. })));
+        assert!(matches!(
+            decode(&bytes, SIZES, FP),
+            Err(Error::BadState { .. })
+        ));
     }
 
     /// Format 7 (format 8 without the held contact status) loads with no point held, and
@@ -538,10 +541,16 @@ mod tests {
         assert_eq!(decode(&bytes, SIZES, FP).unwrap(), s);
         s.linear.jumps.pop();
         let bytes = encode(&s, SIZES, FP).unwrap();
-        assert!(matches!(decode(&bytes, SIZES, FP), Err(Error::BadState { .. })));
+        assert!(matches!(
+            decode(&bytes, SIZES, FP),
+            Err(Error::BadState { .. })
+        ));
         s.linear.jumps.push(f32::NAN);
         let bytes = encode(&s, SIZES, FP).unwrap();
-        assert!(matches!(decode(&bytes, SIZES, FP), Err(Error::BadState { .. })));
+        assert!(matches!(
+            decode(&bytes, SIZES, FP),
+            Err(Error::BadState { .. })
+        ));
     }
 
     /// Each refusal is its own typed error, naming what it found.
@@ -558,13 +567,19 @@ mod tests {
         ));
         let mut other = bytes.clone();
         other[0] = b'X';
-        assert!(matches!(decode(&other, SIZES, FP), Err(Error::BadState { .. })));
+        assert!(matches!(
+            decode(&other, SIZES, FP),
+            Err(Error::BadState { .. })
+        ));
         // A later format with its checksum is StateVersion; a changed version without
         // a new checksum is corruption.
         let later = STATE_FORMAT_VERSION + 1;
         let mut other = bytes.clone();
         other[8..12].copy_from_slice(&later.to_le_bytes());
-        assert!(matches!(decode(&other, SIZES, FP), Err(Error::BadState { .. })));
+        assert!(matches!(
+            decode(&other, SIZES, FP),
+            Err(Error::BadState { .. })
+        ));
         let body = other.len() - CHECKSUM;
         let sum = crc32c::crc32c(&other[..body]);
         other[body..].copy_from_slice(&sum.to_le_bytes());

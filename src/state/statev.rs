@@ -428,7 +428,13 @@ mod tests {
         // As a text restart file would hold them.
         let text: Vec<String> = values.iter().map(|v| format!("{v:e}")).collect();
         let back: Vec<f64> = text.iter().map(|t| t.parse().unwrap()).collect();
-        assert_eq!(read(&back, SIZES, 192, FP).unwrap(), Some(Stored { core: core(), verified: true }));
+        assert_eq!(
+            read(&back, SIZES, 192, FP).unwrap(),
+            Some(Stored {
+                core: core(),
+                verified: true
+            })
+        );
         assert_eq!(read(&vec![0.0; n], SIZES, 192, FP).unwrap(), None);
     }
 
@@ -533,7 +539,13 @@ mod tests {
             time: None,
             ..core()
         };
-        assert_eq!(stored, Stored { core: untimed, verified: false });
+        assert_eq!(
+            stored,
+            Stored {
+                core: untimed,
+                verified: false
+            }
+        );
         let mut changed = old.clone();
         changed[10] += 1.0;
         assert!(read(&changed, SIZES, 192, FP).is_err());
