@@ -635,11 +635,10 @@ impl Umat {
         signal: HostSignal,
     ) -> Result<Outcome, Failed> {
         let n = material.model.statev_len();
-        let mut p = take_slot(self.id, &material, &out.statev[..n])
-            .unwrap_or_else(|| {
-                let id = self.next_id.fetch_add(1, Ordering::Relaxed);
-                Point::new(id, MaterialKey::of(c), material.clone())
-            });
+        let mut p = take_slot(self.id, &material, &out.statev[..n]).unwrap_or_else(|| {
+            let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+            Point::new(id, MaterialKey::of(c), material.clone())
+        });
         let timed = signal == HostSignal::Pnewdt;
         let result = self
             .statev_answer(&mut p, c, &out.statev[..n], timed)
