@@ -12,13 +12,16 @@
 //!   The host keeps the values of the converged increment, hands the start-of-increment
 //!   values at every call (as Abaqus/Standard and CalculiX do), writes them to its
 //!   restart files and zeroes them for new elements and new analyses: there is no commit
-//!   or revert rule to guess. Points are not looked up by `NOEL`/`NPT` (a host may number
-//!   every point 0, as Kratos does): each thread keeps a few instances per material
-//!   ([`SLOTS_PER_THREAD`]), each a cache of the state some `STATEV` values stand for,
-//!   rebuilt ([`Model::expand_core`](crate::Model::expand_core)) when no instance holds
-//!   the values handed in, so the answer is a function of `STATEV`, the strain and
-//!   `DTIME` alone, and a call that repeats one (the same values, strain and `DTIME`: a
-//!   host's stress call, then its tangent call) is answered without solving again. `STATEV(umat_nstatv+1..+5)` receive the inspection mirrors below. A
+//!   or revert rule to guess. The answer is a function of `STATEV`, the strain and
+//!   `DTIME` alone; the library only caches the state the values stand for (rebuilt by
+//!   [`Model::expand_core`](crate::Model::expand_core), one factorization, when the cache
+//!   does not hold them), and a call that repeats one (the same values, strain and
+//!   `DTIME`: a host's stress call, then its tangent call) is answered without solving
+//!   again. A host that passes `PNEWDT` (CalculiX, Abaqus) numbers its points, and the
+//!   cache is its table's point `(NOEL, NPT)`: one rebuild per point and increment. A
+//!   host that does not (Kratos, every point 0) is keyed on nothing but the values: each
+//!   thread keeps a few instances per material ([`SLOTS_PER_THREAD`]) and takes the one
+//!   that holds them, so no point shares or waits for another. `STATEV(umat_nstatv+1..+5)` receive the inspection mirrors below. A
 //!   `STATEV` that is not exactly what the library wrote (flipped bits, a changed,
 //!   zeroed or truncated entry, another model's state) fails the call with a message, and
 //!   so does a valid state that is not this point's at this increment: written under
@@ -38,8 +41,9 @@
 //! `PROPS`, see [`super::material`]) and creates a virgin instance of its model; the
 //! instance lives in the table until the process ends. When `NSTATV` allows, the
 //! mirrors (`STATEV(1:5)` in table mode, after the state in `STATEV` mode) receive the
-//! point's id in the table (1, 2, ... in creation order; in `STATEV` mode the id of the
-//! thread's instance that answered, which points with the same `STATEV` share), the RVE's Newton iterations,
+//! point's id in the table (1, 2, ... in creation order; for a host without `PNEWDT` the
+//! id of the thread's instance that answered, which identifies no point), the RVE's
+//! Newton iterations,
 //! its sub-steps, its damage and its largest ITZ opening ([`super::mirrors`]), for
 //! inspection; the library never reads them.
 //!
@@ -626,7 +630,12 @@ impl Umat {
         self.table_call(c, out)
     }
 
-    /// `STATEV` mode: the answer of this thread's point for the material (see [`SLOTS`]).
+    /// `STATEV` mode. A host that passes `PNEWDT` (CalculiX, Abaqus) numbers its points:
+    /// the table's point `(NOEL, NPT)` is the cache of its state, rebuilt at most once per
+    /// increment. A host that does not (Kratos: every point 0) gets this thread's
+    /// point for the values (see [`SLOTS`]); with more points on a thread than slots that
+    /// rebuilds the state at every call (one factorization), which is why a numbering
+    /// host keeps its table.
     fn statev_call(
         &self,
         c: &UmatCall,
@@ -634,28 +643,50 @@ impl Umat {
         material: Arc<Material>,
         signal: HostSignal,
     ) -> Result<Outcome, Failed> {
+        let failed = |e: Error| Failed {
+            error: Arc::new(e),
+            first: true,
+            material: Some(material.clone()),
+        };
+        if signal == HostSignal::Pnewdt {
+            let point = self.point(c).map_err(|(error, first)| Failed {
+                error,
+                first,
+                material: None,
+            })?;
+            let mut p = lock(&point, c).map_err(failed)?;
+            if !Arc::ptr_eq(&p.material, &material) {
+                *p = Point::new(p.id, MaterialKey::of(c), material.clone());
+            }
+            return self.statev_outcome(&mut p, c, out, true).map_err(failed);
+        }
         let n = material.model.statev_len();
         let mut p = take_slot(self.id, &material, &out.statev[..n]).unwrap_or_else(|| {
             let id = self.next_id.fetch_add(1, Ordering::Relaxed);
             Point::new(id, MaterialKey::of(c), material.clone())
         });
-        let timed = signal == HostSignal::Pnewdt;
-        let result = self
-            .statev_answer(&mut p, c, &out.statev[..n], timed)
-            .and_then(|(r, solved)| {
-                write_outputs(&p, c, &r, out, Some(n))?;
-                Ok(Outcome {
-                    solved,
-                    committed: false,
-                    reverted: false,
-                    iterations: r.report.iterations,
-                })
-            });
+        let result = self.statev_outcome(&mut p, c, out, false);
         put_slot(self.id, p);
-        result.map_err(|e| Failed {
-            error: Arc::new(e),
-            first: true,
-            material: Some(material),
+        result.map_err(failed)
+    }
+
+    /// The `STATEV`-mode answer of point `p` written to `out` (`timed`: the host's
+    /// `TIME(2)` is meaningful).
+    fn statev_outcome(
+        &self,
+        p: &mut Point,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        timed: bool,
+    ) -> crate::Result<Outcome> {
+        let n = p.material.model.statev_len();
+        let (r, solved) = self.statev_answer(p, c, &out.statev[..n], timed)?;
+        write_outputs(p, c, &r, out, Some(n))?;
+        Ok(Outcome {
+            solved,
+            committed: false,
+            reverted: false,
+            iterations: r.report.iterations,
         })
     }
 
