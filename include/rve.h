@@ -473,7 +473,11 @@ const char *rve_status_message(uint32_t code);
 // - `NTENS` 3 (`NDI` 2, `NSHR` 1: plane stress `[11, 22, 12]`), 4 (`NDI` 3, `NSHR` 1:
 //   plane strain `[11, 22, 33, 12]`) or 6 (`NDI` 3, `NSHR` 3: a 3D element held in
 //   plane strain), engineering shear; out-of-plane strains must be zero;
-// - `CMNAME` names the scene: `<SCENE>[@TAG]`, or `@ABAQUS_<LIB>_<FUNC>@<SCENE>[@TAG]`
+// - the environment variable `MESORVE_UMAT_SCENE`, when set (a scene file's path, or a
+//   scene name searched as below), names the scene of every call, and `CMNAME` is not
+//   read; without it, a host that passes a NULL `PNEWDT` gets the embedded paper RVE
+//   (its `CMNAME` is not read either: Kratos passes one byte and no hidden length);
+// - otherwise `CMNAME` names the scene: `<SCENE>[@TAG]`, or `@ABAQUS_<LIB>_<FUNC>@<SCENE>[@TAG]`
 //   for CalculiX; `<SCENE>.toml` (or its lower-case name) is searched in the directories
 //   of `MESORVE_SCENE_PATH` (`:`-separated; default: the working directory); no scene
 //   name is the embedded paper RVE;
@@ -496,7 +500,10 @@ const char *rve_status_message(uint32_t code);
 //   `PNEWDT` < 1, a message in `rve_last_error`, `STRESS` untouched, and a line on
 //   stderr the first time the process meets the reason (the material and the error's
 //   text up to its numbers: a layout the RVE cannot answer prints one line, not one per
-//   point).
+//   point);
+// - a NULL `PNEWDT` (Kratos) is a host that hears of failures and step requests by NaN
+//   in `STRESS`: then `TIME` is one value (`TIME(2)` is not read), table mode is refused,
+//   and a failure or a `PNEWDT` < 1 it would have got fills `STRESS(1:NTENS)` with NaN.
 //
 // `SSE`, `SPD`, `SCD`, `RPL`, `DDSDDT`, `DRPLDE`, `DRPLDT` are not written; `TEMP`,
 // `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `CELENT`, `DFGRD0`, `DFGRD1`, `LAYER`,
@@ -507,8 +514,9 @@ const char *rve_status_message(uint32_t code);
 // # Safety
 // Each pointer the call reads or writes must be valid for the documented length:
 // `STRESS`, `STRAN`, `DSTRAN` (`NTENS`), `DDSDDE` (`NTENS^2`), `STATEV` (`NSTATV`),
-// `PROPS` (`NPROPS`), `TIME` (2), `CMNAME` (`cmname_len` bytes, at most 80 read), the
-// scalars; a NULL one fails the call (`PNEWDT` set when it is not NULL itself).
+// `PROPS` (`NPROPS`), `TIME` (2; 1 when `PNEWDT` is NULL), `CMNAME` (`cmname_len`
+// bytes, at most 80 read; not read when `MESORVE_UMAT_SCENE` is set or `PNEWDT` is NULL),
+// the scalars; a NULL one fails the call. The arguments listed as not read may be NULL.
 void rve_umat(double *stress,
               double *statev,
               double *ddsdde,

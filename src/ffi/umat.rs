@@ -10,7 +10,9 @@ use std::sync::{LazyLock, Mutex, PoisonError};
 
 use super::boundary::{guard, slice, slice_mut, Failure, FfiResult};
 use super::status::RveStatus;
-use crate::host::umat::{global, request_step_ratio, UmatCall, UmatOutputs, FAILURE_STEP_RATIO};
+use crate::host::umat::{
+    global, request_step_ratio, umat_scene, HostSignal, UmatCall, UmatOutputs, FAILURE_STEP_RATIO,
+};
 use crate::host::Hypothesis;
 
 /// CMNAME is `CHARACTER*80` in Abaqus: no more is read.
@@ -63,24 +65,28 @@ fn mask_numbers(text: &str) -> String {
     out
 }
 
-/// The key a failure is printed once under: the material's name and the error's text
-/// with its numbers masked (the strain, PNEWDT, and the element and point numbers a few
-/// errors name; the line itself prints the element and point beside the error).
-fn reason_key(material: &str, reason: &str) -> String {
-    format!("{material}\u{0}{}", mask_numbers(reason))
+/// `text` with each span between backquotes (a material or scene name, a path: the
+/// host's arguments as messages quote them) replaced by `#`.
+fn mask_quoted(text: &str) -> String {
+    text.split('`')
+        .enumerate()
+        .map(|(i, part)| if i % 2 == 1 { "#" } else { part })
+        .collect::<Vec<_>>()
+        .join("`")
+}
+
+/// The key a failure is printed once under: the error's text with its quoted names and
+/// its numbers masked, so a reason is printed once whatever the arguments (the material,
+/// the strain, PNEWDT, the element and point numbers); the line itself names them.
+fn reason_key(reason: &str) -> String {
+    mask_numbers(&mask_quoted(reason))
 }
 
 /// Writes `line` (and the note that it is printed once) to `out` when `seen` does not
 /// hold the reason yet, and remembers it; returns whether it wrote. Write errors are
 /// ignored (stderr closed: nothing to tell).
-fn report_once(
-    seen: &mut HashSet<String>,
-    material: &str,
-    reason: &str,
-    line: &str,
-    out: &mut dyn Write,
-) -> bool {
-    if !seen.insert(reason_key(material, reason)) {
+fn report_once(seen: &mut HashSet<String>, reason: &str, line: &str, out: &mut dyn Write) -> bool {
+    if !seen.insert(reason_key(reason)) {
         return false;
     }
     let _ = writeln!(out, "{line} {PRINTED_ONCE}");
@@ -89,11 +95,40 @@ fn report_once(
 
 /// [`report_once`] on stderr with the process's [`PRINTED`] reasons. Never unwinds (it
 /// also runs outside the panic boundary).
-fn print_once(material: &str, reason: &str, line: &str) {
+fn print_once(reason: &str, line: &str) {
     let _ = std::panic::catch_unwind(|| {
         let mut seen = PRINTED.lock().unwrap_or_else(PoisonError::into_inner);
-        report_once(&mut seen, material, reason, line, &mut std::io::stderr());
+        report_once(&mut seen, reason, line, &mut std::io::stderr());
     });
+}
+
+/// Said once: a host without `PNEWDT` and without `MESORVE_UMAT_SCENE`.
+static NO_SCENE_NOTE: std::sync::Once = std::sync::Once::new();
+
+/// A host's bytes as text that is safe to print: up to the first NUL, printable ASCII
+/// kept, any other byte as `\xNN`.
+fn printable(bytes: &[u8]) -> String {
+    let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
+    bytes[..end]
+        .iter()
+        .map(|&b| match b {
+            b' '..=b'~' => char::from(b).to_string(),
+            _ => format!("\\x{b:02x}"),
+        })
+        .collect()
+}
+
+/// Fills `STRESS(1:NTENS)` with NaN after a failure before the table saw the call, for a
+/// host without `PNEWDT` ([`HostSignal::NanStress`]); nothing when `NTENS` or `STRESS`
+/// cannot be read.
+///
+/// # Safety
+/// As [`rve_umat`]'s.
+unsafe fn nan_stress(stress: *mut f64, ntens: *const c_int) {
+    let Some(&n) = ntens.as_ref() else { return };
+    if let (Ok(n @ 1..=6), false) = (usize::try_from(n), stress.is_null()) {
+        std::slice::from_raw_parts_mut(stress, n).fill(f64::NAN);
+    }
 }
 
 /// The arguments of a UMAT call that the RVE reads or writes, as the host passed them.
@@ -121,6 +156,31 @@ struct Args {
 }
 
 impl Args {
+    /// The material name: `MESORVE_UMAT_SCENE` when set; else none (the embedded paper
+    /// RVE, said once) for a host without `PNEWDT`, whose `CMNAME` has no length to trust
+    /// (Kratos passes one uninitialised byte and no hidden length); else `CMNAME`, up to
+    /// [`CMNAME_MAX`] bytes, with bytes outside printable ASCII escaped.
+    ///
+    /// # Safety
+    /// As [`rve_umat`]'s.
+    unsafe fn material_name(&self, signal: HostSignal) -> FfiResult<String> {
+        if let Some(scene) = umat_scene() {
+            return Ok(scene.name.clone());
+        }
+        if signal == HostSignal::NanStress {
+            NO_SCENE_NOTE.call_once(|| {
+                eprintln!(
+                    "mesorve UMAT: a host without PNEWDT and no MESORVE_UMAT_SCENE: CMNAME is \
+                     not read, every point is the embedded paper RVE (printed once)"
+                )
+            });
+            return Ok(String::new());
+        }
+        let name_len = (self.cmname_len as u32 as usize).min(CMNAME_MAX);
+        let bytes = slice(self.cmname.cast::<u8>(), name_len, "CMNAME")?;
+        Ok(printable(bytes))
+    }
+
     /// Checks and translates the arguments and calls the table; a failure the table saw
     /// is printed (once per reason) and sets `reported`.
     ///
@@ -143,13 +203,22 @@ impl Args {
             Ok(usize::try_from(int(p, name)?).unwrap_or(0))
         };
         let (nstatv, nprops) = (count(self.nstatv, "NSTATV")?, count(self.nprops, "NPROPS")?);
-        let name_len = (self.cmname_len as u32 as usize).min(CMNAME_MAX);
-        let name = String::from_utf8_lossy(slice(self.cmname.cast::<u8>(), name_len, "CMNAME")?);
-        let time = slice(self.time, 2, "TIME")?;
-        let pnewdt = self
-            .pnewdt
-            .as_mut()
-            .ok_or_else(|| Failure::null("PNEWDT"))?;
+        let signal = if self.pnewdt.is_null() {
+            HostSignal::NanStress
+        } else {
+            HostSignal::Pnewdt
+        };
+        let name = self.material_name(signal)?;
+        let time = match signal {
+            HostSignal::Pnewdt => {
+                let t = slice(self.time, 2, "TIME")?;
+                [t[0], t[1]]
+            }
+            // One value: TIME(2) is not read (HostSignal::NanStress).
+            HostSignal::NanStress => [real(self.time, "TIME")?; 2],
+        };
+        let mut no_pnewdt = 0.0;
+        let pnewdt = self.pnewdt.as_mut().unwrap_or(&mut no_pnewdt);
         let call = UmatCall {
             cmname: &name,
             props: if nprops == 0 {
@@ -177,21 +246,20 @@ impl Args {
             },
             pnewdt,
         };
-        global().call(&call, &mut outputs).map(|_| ()).map_err(|f| {
-            *reported = true;
-            if f.first_report {
-                print_once(
-                    &f.cmname,
-                    &f.error.to_string(),
-                    &format!("mesorve UMAT: {f}"),
-                );
-            }
-            Failure {
-                status: RveStatus::from(&*f.error),
-                message: f.to_string(),
-                step_ratio: Some(f.pnewdt),
-            }
-        })
+        global()
+            .call_as(&call, &mut outputs, signal)
+            .map(|_| ())
+            .map_err(|f| {
+                *reported = true;
+                if f.first_report {
+                    print_once(&f.error.to_string(), &format!("mesorve UMAT: {f}"));
+                }
+                Failure {
+                    status: RveStatus::from(&*f.error),
+                    message: f.to_string(),
+                    step_ratio: Some(f.pnewdt),
+                }
+            })
     }
 }
 
@@ -201,7 +269,11 @@ impl Args {
 /// - `NTENS` 3 (`NDI` 2, `NSHR` 1: plane stress `[11, 22, 12]`), 4 (`NDI` 3, `NSHR` 1:
 ///   plane strain `[11, 22, 33, 12]`) or 6 (`NDI` 3, `NSHR` 3: a 3D element held in
 ///   plane strain), engineering shear; out-of-plane strains must be zero;
-/// - `CMNAME` names the scene: `<SCENE>[@TAG]`, or `@ABAQUS_<LIB>_<FUNC>@<SCENE>[@TAG]`
+/// - the environment variable `MESORVE_UMAT_SCENE`, when set (a scene file's path, or a
+///   scene name searched as below), names the scene of every call, and `CMNAME` is not
+///   read; without it, a host that passes a NULL `PNEWDT` gets the embedded paper RVE
+///   (its `CMNAME` is not read either: Kratos passes one byte and no hidden length);
+/// - otherwise `CMNAME` names the scene: `<SCENE>[@TAG]`, or `@ABAQUS_<LIB>_<FUNC>@<SCENE>[@TAG]`
 ///   for CalculiX; `<SCENE>.toml` (or its lower-case name) is searched in the directories
 ///   of `MESORVE_SCENE_PATH` (`:`-separated; default: the working directory); no scene
 ///   name is the embedded paper RVE;
@@ -224,7 +296,10 @@ impl Args {
 ///   `PNEWDT` < 1, a message in `rve_last_error`, `STRESS` untouched, and a line on
 ///   stderr the first time the process meets the reason (the material and the error's
 ///   text up to its numbers: a layout the RVE cannot answer prints one line, not one per
-///   point).
+///   point);
+/// - a NULL `PNEWDT` (Kratos) is a host that hears of failures and step requests by NaN
+///   in `STRESS`: then `TIME` is one value (`TIME(2)` is not read), table mode is refused,
+///   and a failure or a `PNEWDT` < 1 it would have got fills `STRESS(1:NTENS)` with NaN.
 ///
 /// `SSE`, `SPD`, `SCD`, `RPL`, `DDSDDT`, `DRPLDE`, `DRPLDT` are not written; `TEMP`,
 /// `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `CELENT`, `DFGRD0`, `DFGRD1`, `LAYER`,
@@ -235,8 +310,9 @@ impl Args {
 /// # Safety
 /// Each pointer the call reads or writes must be valid for the documented length:
 /// `STRESS`, `STRAN`, `DSTRAN` (`NTENS`), `DDSDDE` (`NTENS^2`), `STATEV` (`NSTATV`),
-/// `PROPS` (`NPROPS`), `TIME` (2), `CMNAME` (`cmname_len` bytes, at most 80 read), the
-/// scalars; a NULL one fails the call (`PNEWDT` set when it is not NULL itself).
+/// `PROPS` (`NPROPS`), `TIME` (2; 1 when `PNEWDT` is NULL), `CMNAME` (`cmname_len`
+/// bytes, at most 80 read; not read when `MESORVE_UMAT_SCENE` is set or `PNEWDT` is NULL),
+/// the scalars; a NULL one fails the call. The arguments listed as not read may be NULL.
 #[allow(clippy::too_many_arguments)]
 #[no_mangle]
 pub unsafe extern "C" fn rve_umat(
@@ -310,9 +386,10 @@ pub unsafe extern "C" fn rve_umat(
     if status != RveStatus::Ok && !reported {
         // Failed before the table saw the call (bad NTENS, a NULL argument, a panic).
         let message = super::last_error_message();
-        print_once("", &message, &format!("mesorve UMAT: {message}"));
-        if let Some(p) = pnewdt.as_mut() {
-            request_step_ratio(p, FAILURE_STEP_RATIO);
+        print_once(&message, &format!("mesorve UMAT: {message}"));
+        match pnewdt.as_mut() {
+            Some(p) => request_step_ratio(p, FAILURE_STEP_RATIO),
+            None => nan_stress(stress, ntens),
         }
     }
 }
@@ -390,8 +467,8 @@ mod tests {
         assert_eq!(mask_numbers("the 2D RVE, 1e+3, x-1"), "the #D RVE, #, x-#");
     }
 
-    /// Two points failing for the same reason (at other strains) print one line; another
-    /// reason, or the same one for another material, prints its own.
+    /// Two points failing for the same reason (at other strains, for other materials or
+    /// names) print one line; another reason prints its own.
     #[test]
     fn a_reason_is_printed_once() {
         let why = |e: f64| {
@@ -400,25 +477,42 @@ mod tests {
                  holds the out-of-plane strains at zero"
             )
         };
+        let missing = |name: &str| format!("scene `{name}` not found (searched `./{name}.toml`)");
         let calls = [
             ("CONCRETE", why(1.2e-5), 1, 1),
             ("CONCRETE", why(-3.4e-6), 7, 4),
             ("CONCRETE", "host convention: NTENS = 5".to_string(), 7, 4),
             ("CONCRETE2", why(1.2e-5), 9, 1),
             ("CONCRETE", why(5e-7), 300, 2),
+            ("\\x9c\\x01", missing("\\x9c\\x01"), 0, 0),
+            ("\\x13", missing("\\x13"), 0, 0),
         ];
         let (mut seen, mut out) = (HashSet::new(), Vec::new());
         let printed: Vec<bool> = calls
             .iter()
             .map(|(material, reason, noel, npt)| {
-                let line = format!("mesorve UMAT: element {noel}, point {npt}: {reason}");
-                report_once(&mut seen, material, reason, &line, &mut out)
+                let line =
+                    format!("mesorve UMAT: element {noel}, point {npt}, `{material}`: {reason}");
+                report_once(&mut seen, reason, &line, &mut out)
             })
             .collect();
-        assert_eq!(printed, [true, false, true, true, false]);
+        assert_eq!(printed, [true, false, true, false, false, true, false]);
         let text = String::from_utf8(out).unwrap();
         assert_eq!(text.lines().count(), 3);
-        assert!(text.starts_with("mesorve UMAT: element 1, point 1: host convention: E33 = 1.2e-5"));
+        assert!(text.starts_with(
+            "mesorve UMAT: element 1, point 1, `CONCRETE`: host convention: E33 = 1.2e-5"
+        ));
         assert!(text.lines().all(|l| l.ends_with(PRINTED_ONCE)));
+    }
+
+    /// A host's bytes print as printable ASCII, up to the first NUL.
+    #[test]
+    fn host_bytes_are_escaped() {
+        assert_eq!(printable(b"CONCRETE  "), "CONCRETE  ");
+        assert_eq!(printable(b"A\x9c\n\x1b[2J"), "A\\x9c\\x0a\\x1b[2J");
+        assert_eq!(printable(b"AB\0garbage\xff"), "AB");
+        assert!(printable(&[0x80, 0xfe, 0x07])
+            .chars()
+            .all(|c| c.is_ascii_graphic()));
     }
 }

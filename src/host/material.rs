@@ -52,6 +52,53 @@ use crate::solver::TangentRequest;
 /// The environment variable that lists the directories searched for scene files.
 pub const SCENE_PATH_VAR: &str = "MESORVE_SCENE_PATH";
 
+/// The environment variable that names the scene of every UMAT call, in place of `CMNAME`
+/// (which is then not read): a scene file's path (with a `/` or ending in `.toml`) or a
+/// scene name searched like a `CMNAME`'s (see [`UmatScene::from_env`]).
+pub const UMAT_SCENE_VAR: &str = "MESORVE_UMAT_SCENE";
+
+/// The scene [`UMAT_SCENE_VAR`] names: the material name the calls get, and the directory
+/// searched first when the variable is a path.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UmatScene {
+    /// The scene name (the file's stem for a path), used as the material name.
+    pub name: String,
+    /// The file's directory for a path; `None` for a name.
+    pub dir: Option<PathBuf>,
+}
+
+impl UmatScene {
+    /// From [`UMAT_SCENE_VAR`]; `None` when it is unset or empty.
+    pub fn from_env() -> Option<UmatScene> {
+        let value = std::env::var_os(UMAT_SCENE_VAR)?;
+        UmatScene::parse(Path::new(&value))
+    }
+
+    /// A path (it has a `/` or ends in `.toml`) gives its stem and directory; anything
+    /// else is a scene name.
+    pub fn parse(value: &Path) -> Option<UmatScene> {
+        let text = value.to_string_lossy();
+        if text.is_empty() {
+            return None;
+        }
+        if !(text.contains('/') || text.ends_with(".toml")) {
+            return Some(UmatScene {
+                name: text.into_owned(),
+                dir: None,
+            });
+        }
+        let dir = match value.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = value.file_stem()?.to_string_lossy().into_owned();
+        Some(UmatScene {
+            name,
+            dir: Some(dir),
+        })
+    }
+}
+
 /// The scene keys that `PROPS(1..=5)` override, in order.
 pub const PROPS_KEYS: [&str; 5] = [
     "materials.itz.sigma_c",
@@ -87,6 +134,11 @@ impl SearchPath {
             Some(v) => SearchPath::new(std::env::split_paths(&v)),
             None => SearchPath::new([]),
         }
+    }
+
+    /// This path with `dir` searched first.
+    pub fn with_first(&self, dir: PathBuf) -> Self {
+        SearchPath::new(std::iter::once(dir).chain(self.0.iter().cloned()))
     }
 
     pub fn dirs(&self) -> &[PathBuf] {
@@ -272,6 +324,31 @@ fn apply_overrides(text: &str, overrides: &[(usize, &'static str, f64)]) -> Resu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A path gives its stem and directory, a bare name is a name, empty is unset.
+    #[test]
+    fn umat_scene_is_a_path_or_a_name() {
+        let scene = |v: &str| UmatScene::parse(Path::new(v));
+        assert_eq!(
+            scene("/a/b/weak_itz.toml"),
+            Some(UmatScene {
+                name: "weak_itz".into(),
+                dir: Some(PathBuf::from("/a/b"))
+            })
+        );
+        assert_eq!(
+            scene("paper_rve.toml").map(|s| s.dir),
+            Some(Some(PathBuf::from(".")))
+        );
+        assert_eq!(
+            scene("CONCRETE"),
+            Some(UmatScene {
+                name: "CONCRETE".into(),
+                dir: None
+            })
+        );
+        assert_eq!(scene(""), None);
+    }
 
     #[test]
     fn scene_names_follow_the_documented_rule() {

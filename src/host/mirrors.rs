@@ -4,7 +4,7 @@
 //!
 //! | mirror | value |
 //! |---|---|
-//! | 1 | the point's id in the process (1, 2, ... in creation order) |
+//! | 1 | the point's id in the process (1, 2, ... in creation order; for a host without `PNEWDT` the id of the thread's RVE instance that answered, which identifies no point) |
 //! | 2 | RVE Newton iterations of the answer |
 //! | 3 | RVE sub-steps of the answer |
 //! | 4 | the RVE's damage `D` in `[0, 1)`, below |

@@ -17,9 +17,9 @@ pub mod mirrors;
 pub mod umat;
 
 pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};
-pub use material::{Material, SearchPath, SCENE_PATH_VAR};
+pub use material::{Material, SearchPath, UmatScene, SCENE_PATH_VAR, UMAT_SCENE_VAR};
 pub use mirrors::{RveMeasures, MIRRORS};
 pub use umat::{
-    global, strain_mismatch, Outcome, Umat, UmatCall, UmatFailure, UmatOutputs, UmatStats,
-    STRAIN_MATCH_FLOOR, STRAIN_MATCH_RELATIVE, TABLE_MODE_MAX_NSTATV,
+    global, strain_mismatch, umat_scene, HostSignal, Outcome, Umat, UmatCall, UmatFailure,
+    UmatOutputs, UmatStats, STRAIN_MATCH_FLOOR, STRAIN_MATCH_RELATIVE, TABLE_MODE_MAX_NSTATV,
 };

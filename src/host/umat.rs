@@ -12,10 +12,16 @@
 //!   The host keeps the values of the converged increment, hands the start-of-increment
 //!   values at every call (as Abaqus/Standard and CalculiX do), writes them to its
 //!   restart files and zeroes them for new elements and new analyses: there is no commit
-//!   or revert rule to guess. The table's instance of the point is a cache of that
-//!   state, rebuilt ([`Model::expand_core`](crate::Model::expand_core)) whenever the values differ from the ones it
-//!   was rebuilt from, so the answer is a function of `STATEV`, the strain and `DTIME`
-//!   alone. `STATEV(umat_nstatv+1..+5)` receive the inspection mirrors below. A
+//!   or revert rule to guess. The answer is a function of `STATEV`, the strain and
+//!   `DTIME` alone; the library only caches the state the values stand for (rebuilt by
+//!   [`Model::expand_core`](crate::Model::expand_core), one factorization, when the cache
+//!   does not hold them), and a call that repeats one (the same values, strain and
+//!   `DTIME`: a host's stress call, then its tangent call) is answered without solving
+//!   again. A host that passes `PNEWDT` (CalculiX, Abaqus) numbers its points, and the
+//!   cache is its table's point `(NOEL, NPT)`: one rebuild per point and increment. A
+//!   host that does not (Kratos, every point 0) is keyed on nothing but the values: each
+//!   thread keeps a few instances per material ([`SLOTS_PER_THREAD`]) and takes the one
+//!   that holds them, so no point shares or waits for another. `STATEV(umat_nstatv+1..+5)` receive the inspection mirrors below. A
 //!   `STATEV` that is not exactly what the library wrote (flipped bits, a changed,
 //!   zeroed or truncated entry, another model's state) fails the call with a message, and
 //!   so does a valid state that is not this point's at this increment: written under
@@ -31,11 +37,13 @@
 //!   re-added element then does not carry the state; a point whose `KSTEP` or `TIME(2)`
 //!   goes back (a new analysis in the process) restarts from a virgin RVE, said once.
 //!
-//! **Instances.** The first call for `(NOEL, NPT)` resolves the material (`CMNAME` and
+//! **Instances (table mode).** The first call for `(NOEL, NPT)` resolves the material (`CMNAME` and
 //! `PROPS`, see [`super::material`]) and creates a virgin instance of its model; the
 //! instance lives in the table until the process ends. When `NSTATV` allows, the
 //! mirrors (`STATEV(1:5)` in table mode, after the state in `STATEV` mode) receive the
-//! point's id in the table (1, 2, ... in creation order), the RVE's Newton iterations,
+//! point's id in the table (1, 2, ... in creation order; for a host without `PNEWDT` the
+//! id of the thread's instance that answered, which identifies no point), the RVE's
+//! Newton iterations,
 //! its sub-steps, its damage and its largest ITZ opening ([`super::mirrors`]), for
 //! inspection; the library never reads them.
 //!
@@ -72,15 +80,22 @@
 //! stderr and keeps it for `rve_last_error`.
 //!
 //! **Threads.** Distinct points may be called from several threads at once (each thread
-//! keeps one workspace per model). One point from two threads at once is refused with
+//! keeps one workspace per model, and its own `STATEV`-mode instances: no lock is shared
+//! between points). In table mode one point from two threads at once is refused with
 //! `Error::HostConvention` (a host never does that within an increment).
+//!
+//! **Hosts without `PNEWDT`** ([`HostSignal::NanStress`], Kratos): a failure or a request
+//! for a smaller step comes back as NaN in `STRESS`; `TIME` is one value (`TIME(2)` is not
+//! read: the state records no time and the `[statev]` time check is off); table mode is
+//! refused.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockError};
 
 use super::hypothesis::{Hypothesis, PlaneResponse};
-use super::material::{Material, SearchPath};
+use super::material::{Material, SearchPath, UmatScene};
 use super::mirrors::{mirrors, MIRRORS};
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
@@ -101,6 +116,21 @@ static IGNORED_NOTE: std::sync::Once = std::sync::Once::new();
 
 /// `PNEWDT` after a failure other than the solver's (which suggests its own ratio).
 pub const FAILURE_STEP_RATIO: f64 = 0.25;
+
+/// How the host hears of a failure or a request for a smaller step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HostSignal {
+    /// Through `PNEWDT` (Abaqus, CalculiX): `STRESS` is left as it came on failure, and
+    /// `TIME(1:2)` are both given.
+    #[default]
+    Pnewdt,
+    /// The host passes no `PNEWDT` (a NULL pointer: Kratos): a failure or a request for
+    /// a smaller step fills `STRESS` with NaN, the signal such a host cuts its step on.
+    /// `TIME` is one value, so `TIME(2)` (`UmatCall::time[1]`) is never read: the
+    /// `STATEV` state records no time and its time check is off, and table mode, which
+    /// follows increments by `TIME(2)`, is refused.
+    NanStress,
+}
 
 /// Relative round-off of `TIME(2)` tolerated within one increment: CalculiX computes it
 /// as `(t + dt) - dt`, which moves by an ulp when a cut-back changes `dt`.
@@ -466,6 +496,9 @@ fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
 
 /// The table of a host's integration points.
 pub struct Umat {
+    /// This table's number in the process: the key of its points in each thread's
+    /// [`SLOTS`].
+    id: u64,
     search: SearchPath,
     materials: Mutex<HashMap<MaterialKey, MaterialEntry>>,
     points: RwLock<HashMap<(i32, i32), PointRef>>,
@@ -480,15 +513,31 @@ pub struct Umat {
 }
 
 /// The process's table, searching scenes on `MESORVE_SCENE_PATH` (read at the first
-/// call); the one the exported `umat_` uses.
+/// call), after the directory of `MESORVE_UMAT_SCENE` when it is a path; the one the
+/// exported `umat_` uses.
 pub fn global() -> &'static Umat {
-    static GLOBAL: LazyLock<Umat> = LazyLock::new(|| Umat::new(SearchPath::from_env()));
+    static GLOBAL: LazyLock<Umat> = LazyLock::new(|| {
+        let search = SearchPath::from_env();
+        Umat::new(match umat_scene().and_then(|s| s.dir.clone()) {
+            Some(dir) => search.with_first(dir),
+            None => search,
+        })
+    });
     &GLOBAL
+}
+
+/// `MESORVE_UMAT_SCENE` as the process read it at its first call: when set, the scene of
+/// every call of the exported `umat_`, whose `CMNAME` is then not read.
+pub fn umat_scene() -> Option<&'static UmatScene> {
+    static SCENE: LazyLock<Option<UmatScene>> = LazyLock::new(UmatScene::from_env);
+    SCENE.as_ref()
 }
 
 impl Umat {
     pub fn new(search: SearchPath) -> Self {
+        static TABLES: AtomicU64 = AtomicU64::new(1);
         Umat {
+            id: TABLES.fetch_add(1, Ordering::Relaxed),
             search,
             materials: Mutex::new(HashMap::new()),
             points: RwLock::new(HashMap::new()),
@@ -525,22 +574,125 @@ impl Umat {
         }
     }
 
-    /// One UMAT call: see the module documentation.
+    /// One UMAT call of a host that passes `PNEWDT`: see the module documentation.
     pub fn call(&self, c: &UmatCall, out: &mut UmatOutputs) -> Result<Outcome, UmatFailure> {
+        self.call_as(c, out, HostSignal::Pnewdt)
+    }
+
+    /// One UMAT call of a host that hears of failures and step requests by `signal`. With
+    /// [`HostSignal::NanStress`], `out.pnewdt` is the caller's own (start it at 0: no
+    /// request), and `STRESS` is NaN when the call fails or asks for a smaller step.
+    pub fn call_as(
+        &self,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        signal: HostSignal,
+    ) -> Result<Outcome, UmatFailure> {
         self.calls.fetch_add(1, Ordering::Relaxed);
-        self.call_inner(c, out).map_err(|f| {
+        let result = self.call_inner(c, out, signal).map_err(|f| {
             self.failures.fetch_add(1, Ordering::Relaxed);
             self.fail(c, out, f.error, f.first, f.material.as_deref())
+        });
+        let asks_smaller = *out.pnewdt > 0.0 && *out.pnewdt < 1.0;
+        if signal == HostSignal::NanStress && (result.is_err() || asks_smaller) {
+            out.stress.fill(f64::NAN);
+        }
+        result
+    }
+
+    fn call_inner(
+        &self,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        signal: HostSignal,
+    ) -> Result<Outcome, Failed> {
+        check_lengths(c, out).map_err(plain)?;
+        let material = match slot_material(self.id, c) {
+            Some(m) => m,
+            None => self.material(c).map_err(|(error, first)| Failed {
+                error,
+                first,
+                material: None,
+            })?,
+        };
+        let with_material = |e: Error| Failed {
+            error: Arc::new(e),
+            first: true,
+            material: Some(material.clone()),
+        };
+        let statev_len = material.model.statev_len();
+        if statev_mode(c, out.statev.len(), statev_len).map_err(with_material)? {
+            return self.statev_call(c, out, material, signal);
+        }
+        if signal == HostSignal::NanStress {
+            return Err(with_material(table_refused(out.statev.len(), statev_len)));
+        }
+        self.table_call(c, out)
+    }
+
+    /// `STATEV` mode. A host that passes `PNEWDT` (CalculiX, Abaqus) numbers its points:
+    /// the table's point `(NOEL, NPT)` is the cache of its state, rebuilt at most once per
+    /// increment. A host that does not (Kratos: every point 0) gets this thread's
+    /// point for the values (see [`SLOTS`]); with more points on a thread than slots that
+    /// rebuilds the state at every call (one factorization), which is why a numbering
+    /// host keeps its table.
+    fn statev_call(
+        &self,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        material: Arc<Material>,
+        signal: HostSignal,
+    ) -> Result<Outcome, Failed> {
+        let failed = |e: Error| Failed {
+            error: Arc::new(e),
+            first: true,
+            material: Some(material.clone()),
+        };
+        if signal == HostSignal::Pnewdt {
+            let point = self.point(c).map_err(|(error, first)| Failed {
+                error,
+                first,
+                material: None,
+            })?;
+            let mut p = lock(&point, c).map_err(failed)?;
+            if !Arc::ptr_eq(&p.material, &material) {
+                *p = Point::new(p.id, MaterialKey::of(c), material.clone());
+            }
+            return self.statev_outcome(&mut p, c, out, true).map_err(failed);
+        }
+        let n = material.model.statev_len();
+        let mut p = take_slot(self.id, &material, &out.statev[..n]).unwrap_or_else(|| {
+            let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+            Point::new(id, MaterialKey::of(c), material.clone())
+        });
+        let result = self.statev_outcome(&mut p, c, out, false);
+        put_slot(self.id, p);
+        result.map_err(failed)
+    }
+
+    /// The `STATEV`-mode answer of point `p` written to `out` (`timed`: the host's
+    /// `TIME(2)` is meaningful).
+    fn statev_outcome(
+        &self,
+        p: &mut Point,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        timed: bool,
+    ) -> crate::Result<Outcome> {
+        let n = p.material.model.statev_len();
+        let (r, solved) = self.statev_answer(p, c, &out.statev[..n], timed)?;
+        write_outputs(p, c, &r, out, Some(n))?;
+        Ok(Outcome {
+            solved,
+            committed: false,
+            reverted: false,
+            iterations: r.report.iterations,
         })
     }
 
-    fn call_inner(&self, c: &UmatCall, out: &mut UmatOutputs) -> Result<Outcome, Failed> {
-        let plain = |e: Error| Failed {
-            error: Arc::new(e),
-            first: true,
-            material: None,
-        };
-        check_lengths(c, out).map_err(plain)?;
+    /// Table mode: the point `(NOEL, NPT)` of the process's table, following the
+    /// host's increments.
+    fn table_call(&self, c: &UmatCall, out: &mut UmatOutputs) -> Result<Outcome, Failed> {
         let point = self.point(c).map_err(|(error, first)| Failed {
             error,
             first,
@@ -556,31 +708,20 @@ impl Umat {
             first: true,
             material: Some(material.clone()),
         };
-        let statev_len = material.model.statev_len();
-        let in_statev = statev_mode(c, out.statev.len(), statev_len).map_err(with_material)?;
-        let (committed, reverted) = if in_statev {
-            (false, false)
-        } else {
-            table_note(c, out.statev.len(), statev_len);
-            let inc = Increment {
-                kstep: c.kstep,
-                kinc: c.kinc,
-                start: c.time[1],
-            };
-            p.advance(inc, c.dtime).map_err(with_material)?
+        table_note(c, out.statev.len(), material.model.statev_len());
+        let inc = Increment {
+            kstep: c.kstep,
+            kinc: c.kinc,
+            start: c.time[1],
         };
+        let (committed, reverted) = p.advance(inc, c.dtime).map_err(with_material)?;
         self.commits.fetch_add(committed as u64, Ordering::Relaxed);
         self.reverts.fetch_add(reverted as u64, Ordering::Relaxed);
-        let answer = if in_statev {
-            self.statev_answer(&mut p, c, &out.statev[..statev_len])
-        } else {
-            self.answer(&mut p, c)
-        };
-        let (r, solved) = answer.map_err(|e| {
+        let (r, solved) = self.answer(&mut p, c).map_err(|e| {
             p.failed = true;
             with_material(e)
         })?;
-        write_outputs(&p, c, &r, out, in_statev.then_some(statev_len)).map_err(with_material)?;
+        write_outputs(&p, c, &r, out, None).map_err(with_material)?;
         Ok(Outcome {
             solved,
             committed,
@@ -620,6 +761,7 @@ impl Umat {
         p: &mut Point,
         c: &UmatCall,
         statev: &[f64],
+        timed: bool,
     ) -> crate::Result<(Response, bool)> {
         let strain = call_strain(p, c)?;
         let model = p.material.model.clone();
@@ -656,7 +798,7 @@ impl Umat {
             p.core_values = Some(statev.to_vec());
         }
         let virgin = statev.iter().all(|&v| v == 0.0);
-        check_start_strain(p, c, virgin)?;
+        check_start_strain(p, c, virgin, timed)?;
         p.trial_values = None;
         let request = p.material.tangent;
         let r = with_workspace(&model, |ws| {
@@ -664,7 +806,7 @@ impl Umat {
         })?;
         let mut written = vec![0.0; statev.len()];
         let mut core = p.instance.trial_core()?;
-        core.time = Some(c.time[1] + c.dtime);
+        core.time = timed.then(|| c.time[1] + c.dtime);
         p.trial_time = core.time;
         statev::write(
             &core,
@@ -801,6 +943,112 @@ impl Umat {
     }
 }
 
+/// A failure without a material.
+fn plain(e: Error) -> Failed {
+    Failed {
+        error: Arc::new(e),
+        first: true,
+        material: None,
+    }
+}
+
+/// Table mode asked for by a host without `PNEWDT` ([`HostSignal::NanStress`]): refused,
+/// since such a host (Kratos) gives none of what the table follows: every point is
+/// `NOEL` = `NPT` = 0, `KINC` counts Newton iterations, and `TIME` is one value.
+fn table_refused(nstatv: usize, needed: usize) -> Error {
+    Error::HostConvention(format!(
+        "NSTATV = {nstatv} asks for the library's table of points, which a host without \
+         PNEWDT (NULL, as Kratos passes it) cannot drive: it keys points on NOEL and NPT \
+         and increments on KSTEP, KINC and TIME(2), and such a host numbers every point 0 \
+         and counts Newton iterations in KINC. Give {needed} STATEV entries (plus up to \
+         {MIRRORS} for the mirrors: `rve info`'s umat_nstatv), all zero, to keep the state \
+         in STATEV"
+    ))
+}
+
+/// `STATEV`-mode points kept per thread, at most this many (all tables together).
+const SLOTS_PER_THREAD: usize = 4;
+
+/// A `STATEV`-mode point of a thread: a cache of the state some `STATEV` values stand
+/// for, keyed by nothing but those values (and the table and material), never by `NOEL`
+/// or `NPT`. Two calls with the same values, strain and `DTIME` (a host's stress call
+/// then its tangent call) are answered by one solve, bit for bit.
+struct Slot {
+    table: u64,
+    /// Last use, for replacing the least recently used slot.
+    stamp: u64,
+    point: Point,
+}
+
+thread_local! {
+    /// This thread's `STATEV`-mode points ([`Slot`]): no lock, no point shared with
+    /// another thread.
+    static SLOTS: RefCell<(u64, Vec<Slot>)> = const { RefCell::new((0, Vec::new())) };
+}
+
+/// The material of a call whose table and name this thread has a slot of.
+fn slot_material(table: u64, c: &UmatCall) -> Option<Arc<Material>> {
+    SLOTS
+        .try_with(|slots| {
+            let slots = slots.borrow();
+            let found = slots
+                .1
+                .iter()
+                .find(|s| s.table == table && s.point.key.matches(c));
+            found.map(|s| s.point.material.clone())
+        })
+        .ok()
+        .flatten()
+}
+
+/// Takes this thread's point of `material` whose committed values are `statev` (else
+/// whose pending trial's values are, else the least recently used one), or `None`. The
+/// caller puts it back with [`put_slot`]; a panic in between drops it.
+fn take_slot(table: u64, material: &Arc<Material>, statev: &[f64]) -> Option<Point> {
+    let holds = |kept: &Option<Vec<f64>>| {
+        kept.as_ref().is_some_and(|k| {
+            k.iter()
+                .map(|v| v.to_bits())
+                .eq(statev.iter().map(|v| v.to_bits()))
+        })
+    };
+    SLOTS
+        .try_with(|slots| {
+            let slots = &mut slots.borrow_mut().1;
+            let ours = |s: &Slot| s.table == table && Arc::ptr_eq(&s.point.material, material);
+            let find = |f: &dyn Fn(&Slot) -> bool| slots.iter().position(|s| ours(s) && f(s));
+            let pick = find(&|s| holds(&s.point.core_values))
+                .or_else(|| find(&|s| holds(&s.point.trial_values)))
+                .or_else(|| {
+                    let mine = slots.iter().enumerate().filter(|(_, s)| ours(s));
+                    mine.min_by_key(|(_, s)| s.stamp).map(|(i, _)| i)
+                })?;
+            Some(slots.swap_remove(pick).point)
+        })
+        .ok()
+        .flatten()
+}
+
+/// Gives `point` back to this thread's slots, dropping the least recently used one
+/// beyond [`SLOTS_PER_THREAD`].
+fn put_slot(table: u64, point: Point) {
+    let _ = SLOTS.try_with(|slots| {
+        let (clock, slots) = &mut *slots.borrow_mut();
+        *clock += 1;
+        slots.push(Slot {
+            table,
+            stamp: *clock,
+            point,
+        });
+        if slots.len() > SLOTS_PER_THREAD {
+            let oldest = slots.iter().enumerate().min_by_key(|(_, s)| s.stamp);
+            if let Some((i, _)) = oldest {
+                slots.swap_remove(i);
+            }
+        }
+    });
+}
+
 /// The point's lock; a point poisoned by a panic in an earlier call keeps its committed
 /// state (only ever replaced whole) and drops its trial.
 fn lock<'p>(point: &'p PointRef, c: &UmatCall) -> crate::Result<MutexGuard<'p, Point>> {
@@ -884,7 +1132,7 @@ pub fn strain_mismatch(stored: [f64; 3], host: [f64; 3]) -> Option<(f64, f64)> {
 /// be the host's `STRAN` to [`STRAIN_MATCH_RELATIVE`] of the larger of the two, plus
 /// [`STRAIN_MATCH_FLOOR`]; an all-zero `STATEV` (`virgin`) at a strained point is a lost
 /// state unless the scene says the host zeroes it on purpose (`[statev]`).
-fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool) -> crate::Result<()> {
+fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool, timed: bool) -> crate::Result<()> {
     let spec = p.material.model.scene().spec.statev;
     if !spec.check_strain {
         return Ok(());
@@ -892,7 +1140,7 @@ fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool) -> crate::Result<()
     let host = c.hypothesis.rve_strain(c.stran)?;
     let stored = p.instance.committed().strain;
     let Some((difference, tolerance)) = strain_mismatch(stored, host) else {
-        return check_start_time(p, c, spec.check_time);
+        return check_start_time(p, c, spec.check_time && timed);
     };
     if virgin {
         if spec.zero_at_strain == ZeroAtStrain::Virgin {
