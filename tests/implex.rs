@@ -45,23 +45,7 @@ fn model(text: &str) -> (Arc<Model>, Vec<[f64; 3]>) {
 /// Follows `points`, each increment's time step the norm of its strain increment (as `rve
 /// run` does), and returns every committed response.
 fn follow(model: &Arc<Model>, points: &[[f64; 3]]) -> Vec<Response> {
-    let mut instance = Instance::new(model.clone());
-    let mut ws = model.workspace();
-    let mut previous = [0.0; 3];
-    let mut out = Vec::new();
-    for &eps in points {
-        let dt = (0..3)
-            .map(|c| (eps[c] - previous[c]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        previous = eps;
-        let r = instance
-            .update_timed(eps, dt, &mut ws, TangentRequest::Consistent)
-            .unwrap();
-        instance.commit().unwrap();
-        out.push(r);
-    }
-    out
+    common::follow_committed(&mut Instance::new(model.clone()), points)
 }
 
 /// Within a step (same committed state, same time increment), the stress is linear in the

@@ -11,7 +11,6 @@ use std::sync::Arc;
 
 use rve::host::{Hypothesis, SearchPath, Umat, UmatCall, UmatOutputs};
 use rve::scene::{path_points, Scene};
-use rve::solver::TangentRequest;
 use rve::{Instance, Model, Response};
 
 /// The paper's RVE (§5.2.1) integrated by IMPL-EX, with `extra` added under `[solver]`.
@@ -28,24 +27,8 @@ fn implex_text(extra: &str) -> String {
 fn follow(text: &str) -> (Vec<Response>, u64) {
     let scene = Scene::from_toml_str(text, common::repo("scenes")).unwrap();
     let model = Arc::new(Model::from_scene(&scene).unwrap());
-    let mut instance = Instance::new(model.clone());
-    let mut ws = model.workspace();
-    let mut previous = [0.0; 3];
-    let responses = path_points(&scene.spec.path)
-        .into_iter()
-        .map(|eps| {
-            let dt = (0..3)
-                .map(|c| (eps[c] - previous[c]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            previous = eps;
-            let r = instance
-                .update_timed(eps, dt, &mut ws, TangentRequest::Consistent)
-                .unwrap();
-            instance.commit().unwrap();
-            r
-        })
-        .collect();
+    let mut instance = Instance::new(model);
+    let responses = common::follow_committed(&mut instance, &path_points(&scene.spec.path));
     (responses, instance.ignored_redos().0)
 }
 

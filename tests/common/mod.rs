@@ -61,3 +61,25 @@ pub fn cycle_call<'a>(
         kinc: k as i32 + 1,
     }
 }
+
+/// Follows `points` with `instance`, each increment's time step the norm of its strain
+/// increment (as `rve run` does), committing every increment; the responses.
+pub fn follow_committed(instance: &mut rve::Instance, points: &[[f64; 3]]) -> Vec<rve::Response> {
+    let model = instance.model().clone();
+    let mut ws = model.workspace();
+    let mut previous = [0.0; 3];
+    let mut out = Vec::new();
+    for &eps in points {
+        let dt = (0..3)
+            .map(|c| (eps[c] - previous[c]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        previous = eps;
+        let r = instance
+            .update_timed(eps, dt, &mut ws, rve::solver::TangentRequest::Consistent)
+            .unwrap();
+        instance.commit().unwrap();
+        out.push(r);
+    }
+    out
+}
