@@ -222,7 +222,11 @@ impl VtkDump {
         self.written.fetch_add(1, Ordering::Relaxed);
         series.last = Some((increment, strain));
         let end = c.time[1] + c.dtime;
-        let time = if end.is_finite() { end } else { f64::from(c.kinc) };
+        let time = if end.is_finite() {
+            end
+        } else {
+            f64::from(c.kinc)
+        };
         series.files.insert(increment, (time, name));
         let entries: Vec<(f64, String)> = series.files.values().cloned().collect();
         let index = self.spec.dir.join(Self::index_name(c.noel, c.npt));
