@@ -9,8 +9,10 @@
 //! damage is the damage mirror in `STATEV`; damage grows past the stress peak. An earlier
 //! iteration of an increment is overwritten, a repeated call writes nothing, a point not
 //! chosen gets no file, and the answers are those of a table without the switch, bit for
-//! bit. Bad values give one message naming the variable and the value; a directory that
-//! goes away makes writes fail without failing a call.
+//! bit. With IMPL-EX the increments that reuse their step's factorization get no file and
+//! are counted, the others hold their answer. Bad values give one message naming the
+//! variable and the value; a directory that goes away makes writes fail without failing a
+//! call.
 
 mod common;
 
@@ -42,8 +44,20 @@ fn temp(tag: &str) -> PathBuf {
 /// returns STRESS and the STATEV written.
 fn call(table: &Umat, noel: i32, k: usize, eps: f64, statev: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let start = END * (k - 1) as f64 / INCREMENTS as f64;
-    let (stran, dstran) = ([start, 0.0, 0.0], [eps - start, 0.0, 0.0]);
-    let c = common::cycle_call("paper_rve", &[], &stran, &dstran, noel, k - 1);
+    call_from(table, "paper_rve", noel, k, [start, eps], statev)
+}
+
+/// [`call`] of material `cmname` from `strain[0]` to `strain[1]`.
+fn call_from(
+    table: &Umat,
+    cmname: &str,
+    noel: i32,
+    k: usize,
+    strain: [f64; 2],
+    statev: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    let (stran, dstran) = ([strain[0], 0.0, 0.0], [strain[1] - strain[0], 0.0, 0.0]);
+    let c = common::cycle_call(cmname, &[], &stran, &dstran, noel, k - 1);
     let (mut stress, mut ddsdde, mut pnewdt) = (vec![0.0; 3], vec![0.0; 9], -1.0);
     let mut statev = statev.to_vec();
     let mut out = UmatOutputs {
@@ -308,4 +322,52 @@ fn a_write_failure_does_not_fail_the_call() {
     let vtk = table.vtk().unwrap();
     assert_eq!((vtk.written(), vtk.failures()), (0, 3 * INCREMENTS as u64));
     assert!(!dir.exists());
+}
+
+/// IMPL-EX past the peak and back: the increments that reuse their step's factorization
+/// (unloading) get no file and are counted; every file written holds its answer.
+#[test]
+fn implex_increments_without_a_fluctuation_get_no_file() {
+    let cmname = "paper_rve_host_implex";
+    let file = common::repo(&format!("scenes/{cmname}.toml"));
+    let nstatv = cache::model_for_file(&file).unwrap().statev_len() + 5;
+    let dir = temp("implex");
+    let table = umat(Some(
+        VtkDump::from_value(&format!("{}:1.1", dir.display())).unwrap(),
+    ));
+    let mut path: Vec<f64> = (1..=INCREMENTS)
+        .map(|k| END * k as f64 / INCREMENTS as f64)
+        .collect();
+    path.extend((1..=6).map(|k| END * (1.0 - k as f64 / 8.0)));
+    let (mut kept, mut start, mut stresses) = (vec![0.0; nstatv], 0.0, Vec::new());
+    for (k, &eps) in path.iter().enumerate() {
+        let (stress, statev) = call_from(&table, cmname, 1, k + 1, [start, eps], &kept);
+        call_from(&table, cmname, 1, k + 1, [start, eps], &kept);
+        stresses.push(stress);
+        (kept, start) = (statev, eps);
+    }
+    let vtk = table.vtk().unwrap();
+    assert!(vtk.skipped() > 0, "no IMPL-EX increment reused its step");
+    assert_eq!(vtk.failures(), 0);
+    let pvd = std::fs::read_to_string(dir.join(VtkDump::index_name(1, 1))).unwrap();
+    let mut listed = 0;
+    for (k, (eps, stress)) in path.iter().zip(&stresses).enumerate() {
+        let name = VtkDump::file_name(1, 1, 1, k as i32 + 1);
+        let exists = dir.join(&name).exists();
+        assert_eq!(exists, pvd.contains(&format!("\"{name}\"")), "{name}");
+        if !exists {
+            continue;
+        }
+        listed += 1;
+        let (strain, avg, _) = file_measures(&read_vtu(&dir.join(&name)));
+        assert!(
+            (strain[0] - eps).abs() <= 1e-11 * END,
+            "{name}: {strain:?} against {eps}"
+        );
+        let scale = stress.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+        let err = (0..3).fold(0.0f64, |m, i| m.max((avg[i] - stress[i]).abs())) / scale;
+        assert!(err <= 1e-9, "{name}: {avg:?} against {stress:?}");
+    }
+    assert_eq!(listed as u64 + vtk.skipped(), path.len() as u64);
+    std::fs::remove_dir_all(&dir).unwrap();
 }
