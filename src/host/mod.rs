@@ -9,12 +9,14 @@
 //! - [`mirrors`]: the values the UMAT writes after the RVE state for a host to plot
 //!   (point id, iterations, sub-steps, the RVE's damage, its largest ITZ opening);
 //! - [`umat`]: the Abaqus UMAT: instances per (element, integration point), committed and
-//!   reverted by the host's increments.
+//!   reverted by the host's increments;
+//! - [`vtk_dump`]: `MESORVE_UMAT_VTK`, the RVE fields of chosen points as VTK files.
 
 pub mod hypothesis;
 pub mod material;
 pub mod mirrors;
 pub mod umat;
+pub mod vtk_dump;
 
 pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};
 pub use material::{Material, SearchPath, UmatScene, SCENE_PATH_VAR, UMAT_SCENE_VAR};
@@ -23,3 +25,4 @@ pub use umat::{
     global, strain_mismatch, umat_scene, HostSignal, Outcome, Umat, UmatCall, UmatFailure,
     UmatOutputs, UmatStats, STRAIN_MATCH_FLOOR, STRAIN_MATCH_RELATIVE, TABLE_MODE_MAX_NSTATV,
 };
+pub use vtk_dump::{VtkDump, VtkSpec, VtkSpecError, UMAT_VTK_VAR};

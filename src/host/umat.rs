@@ -97,6 +97,7 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockEr
 use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, UmatScene};
 use super::mirrors::{mirrors, MIRRORS};
+use super::vtk_dump::{self, VtkDump};
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
@@ -510,6 +511,8 @@ pub struct Umat {
     reverts: AtomicU64,
     loads: AtomicU64,
     failures: AtomicU64,
+    /// `MESORVE_UMAT_VTK`: the RVE fields of chosen points as VTK ([`super::vtk_dump`]).
+    vtk: Option<VtkDump>,
 }
 
 /// The process's table, searching scenes on `MESORVE_SCENE_PATH` (read at the first
@@ -522,6 +525,7 @@ pub fn global() -> &'static Umat {
             Some(dir) => search.with_first(dir),
             None => search,
         })
+        .with_vtk(VtkDump::from_env())
     });
     &GLOBAL
 }
@@ -549,7 +553,20 @@ impl Umat {
             reverts: AtomicU64::new(0),
             loads: AtomicU64::new(0),
             failures: AtomicU64::new(0),
+            vtk: None,
         }
+    }
+
+    /// This table writing the RVE fields of the points `vtk` chooses ([`super::vtk_dump`];
+    /// `None`: none, the default).
+    pub fn with_vtk(mut self, vtk: Option<VtkDump>) -> Self {
+        self.vtk = vtk;
+        self
+    }
+
+    /// The VTK switch of this table, if on.
+    pub fn vtk(&self) -> Option<&VtkDump> {
+        self.vtk.as_ref()
     }
 
     pub fn search_path(&self) -> &SearchPath {
@@ -682,6 +699,7 @@ impl Umat {
         let n = p.material.model.statev_len();
         let (r, solved) = self.statev_answer(p, c, &out.statev[..n], timed)?;
         write_outputs(p, c, &r, out, Some(n))?;
+        vtk_dump::at_answer(&self.vtk, &p.instance, c);
         Ok(Outcome {
             solved,
             committed: false,
@@ -722,6 +740,7 @@ impl Umat {
             with_material(e)
         })?;
         write_outputs(&p, c, &r, out, None).map_err(with_material)?;
+        vtk_dump::at_answer(&self.vtk, &p.instance, c);
         Ok(Outcome {
             solved,
             committed,

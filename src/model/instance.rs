@@ -3,6 +3,7 @@
 //! `Instance` behind each handle) all go through it, and so does checkpointing (the bytes
 //! of [`crate::state::persist`]).
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use super::rve_model::{Model, Response};
@@ -389,6 +390,21 @@ impl Instance {
                 Ok(core)
             }
             _ => Err(Error::NoTrial),
+        }
+    }
+
+    /// The state of the pending trial, `None` without one: borrowed after a solve, a copy
+    /// of the committed state at the trial's strain after a fast update (its unknowns then
+    /// lag: [`Model::current_state`] forms them). For outputs, not for the hot path.
+    pub fn trial_state(&self) -> Option<Cow<'_, State>> {
+        match (self.pending, &self.trial) {
+            (Pending::Solved, Some(trial)) => Some(Cow::Borrowed(trial)),
+            (Pending::Fast(strain), _) => {
+                let mut state = self.committed.clone();
+                state.strain = strain;
+                Some(Cow::Owned(state))
+            }
+            _ => None,
         }
     }
 
