@@ -505,3 +505,46 @@ fn with_scratch<T>(model: &Model, f: impl FnOnce(&mut State) -> Result<T>) -> Re
     });
     result
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::cache;
+    use crate::scene::DEFAULT_SCENE_TOML;
+
+    /// A lean instance answers bit for bit as a full one along a loading path followed as
+    /// a `STATEV` host does (each increment's trial core expanded as the next committed
+    /// state, with a second iteration from the same committed state), writes the same
+    /// cores, and holds no second full state.
+    #[test]
+    fn a_lean_instance_answers_as_a_full_one_with_less_memory() {
+        let model = cache::model_for_text(DEFAULT_SCENE_TOML, None).unwrap();
+        let mut ws = model.workspace();
+        let (mut full, mut lean) = (Instance::new(model.clone()), Instance::new(model.clone()));
+        lean.set_lean(true);
+        for k in 1..=4 {
+            let mut cores = Vec::new();
+            for inst in [&mut full, &mut lean] {
+                let mut answers = Vec::new();
+                for x in [0.9, 1.0] {
+                    let strain = [x * 4e-5 * k as f64, -1e-5 * k as f64, 2e-5];
+                    let r = inst
+                        .update(strain, &mut ws, TangentRequest::Consistent)
+                        .unwrap();
+                    answers.push((r.stress.map(f64::to_bits), r.tangent.map(f64::to_bits)));
+                }
+                cores.push((
+                    answers,
+                    inst.trial_core().unwrap(),
+                    inst.trial_history().to_vec(),
+                ));
+            }
+            assert_eq!(cores[0], cores[1], "increment {k}");
+            assert!(lean.state_bytes() + 5000 < full.state_bytes());
+            assert!(matches!(lean.commit(), Err(Error::NoTrial)));
+            for inst in [&mut full, &mut lean] {
+                inst.load_core(Some(&cores[0].1), &mut ws).unwrap();
+            }
+        }
+    }
+}
