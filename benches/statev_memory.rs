@@ -16,10 +16,12 @@
 //!   warm-up of 64 other points (model, workspaces) exist and are written through
 //!   before the baseline; library memory = (peak RSS after the increments - baseline) / N.
 //! - **Time.** Every call is timed; medians per increment of the solving calls and of the
-//!   repeated ones. Every first call must solve (`rve_umat` then writes iterations >= 1
-//!   to the mirror `STATEV(umat_nstatv + 2)`; the bench asserts a nonzero stress and
-//!   that the written values changed), so no cache answers a timed solve: each point's
-//!   first call of an increment is its only solve at that strain from those values.
+//!   repeated ones. Every first call must solve and every second one repeat it (the
+//!   UMAT's counters, `rve::host::global().stats()`, must move by N solves and N
+//!   repeats per increment; the bench also asserts a nonzero stress, new values written,
+//!   and the repeat's stress and values equal to the solve's bit for bit), so no cache
+//!   answers a timed solve: each point's first call of an increment is its only solve at
+//!   that strain from those values.
 //!
 //! The main process prints the scene sizes and runs both scenes (`paper_rve.toml`,
 //! implicit, and `paper_rve_host_implex.toml`, IMPL-EX).
@@ -161,6 +163,7 @@ fn increment(
     let stran = if kinc == 1 { 0.0 } else { STRAINS[kinc - 2] };
     let target = STRAINS[kinc - 1];
     let (mut solves, mut repeats) = (Vec::new(), Vec::new());
+    let (before, calls) = (rve::host::global().stats(), range.len() as u64);
     for i in range {
         let start = &mut host[i * n..(i + 1) * n];
         buf.copy_from_slice(start);
@@ -168,7 +171,7 @@ fn increment(
         let s1 = call(i + 1, kinc, stran, target, buf);
         solves.push(t.elapsed().as_secs_f64() * 1e6);
         let written = buf[..n - MIRRORS].to_vec();
-        assert!(s1[0] > 0.0 && written != start[..n - MIRRORS], "not solved");
+        assert!(s1[0] > 0.0 && written != start[..n - MIRRORS], "no new state written");
         buf.copy_from_slice(start);
         let t = Instant::now();
         let s2 = call(i + 1, kinc, stran, target, buf);
@@ -181,6 +184,9 @@ fn increment(
         );
         start.copy_from_slice(buf);
     }
+    let after = rve::host::global().stats();
+    assert_eq!(after.solves - before.solves, calls, "a first call was not solved");
+    assert_eq!(after.repeats - before.repeats, calls, "a second call was solved");
     (solves, repeats)
 }
 
