@@ -171,7 +171,10 @@ fn increment(
         let s1 = call(i + 1, kinc, stran, target, buf);
         solves.push(t.elapsed().as_secs_f64() * 1e6);
         let written = buf[..n - MIRRORS].to_vec();
-        assert!(s1[0] > 0.0 && written != start[..n - MIRRORS], "no new state written");
+        assert!(
+            s1[0] > 0.0 && written != start[..n - MIRRORS],
+            "no new state written"
+        );
         buf.copy_from_slice(start);
         let t = Instant::now();
         let s2 = call(i + 1, kinc, stran, target, buf);
@@ -185,8 +188,16 @@ fn increment(
         start.copy_from_slice(buf);
     }
     let after = rve::host::global().stats();
-    assert_eq!(after.solves - before.solves, calls, "a first call was not solved");
-    assert_eq!(after.repeats - before.repeats, calls, "a second call was solved");
+    assert_eq!(
+        after.solves - before.solves,
+        calls,
+        "a first call was not solved"
+    );
+    assert_eq!(
+        after.repeats - before.repeats,
+        calls,
+        "a second call was solved"
+    );
     (solves, repeats)
 }
 
