@@ -349,11 +349,12 @@ struct Point {
     last: Option<([f64; 3], Response)>,
     /// The last call failed.
     failed: bool,
-    /// `STATEV` mode: the values the committed state stands for (see
-    /// [`Umat::statev_answer`]), and the values written for the pending trial; `None` in
-    /// table mode and before the first call.
-    core_values: Option<Vec<f64>>,
-    trial_values: Option<Vec<f64>>,
+    /// `STATEV` mode: hashes ([`values_hash`]) of the values the committed state stands
+    /// for (see [`Umat::statev_answer`]) and of the values written for the pending trial;
+    /// `None` in table mode and before the first call. The values themselves are not
+    /// kept: [`Point::holds_core`] and [`Point::holds_trial`] re-encode the state.
+    core_hash: Option<u64>,
+    trial_hash: Option<u64>,
     /// `STATEV` mode: the host's time the committed state and the pending trial were
     /// written at the end of (`statev::Core::time`).
     core_time: Option<f64>,
@@ -372,11 +373,47 @@ impl Point {
             dtime: 0.0,
             last: None,
             failed: false,
-            core_values: None,
-            trial_values: None,
+            core_hash: None,
+            trial_hash: None,
             core_time: None,
             trial_time: None,
         }
+    }
+
+    /// Whether `statev` are the values the committed state stands for: they hash as the
+    /// ones it was loaded from, and its core (at [`Point::core_time`]) encodes to them bit
+    /// for bit (values of state format 1 never do: they are expanded again).
+    /// All-zero values (a virgin RVE) are held by a committed state whose core is the
+    /// virgin state's.
+    fn holds_core(&self, statev: &[f64]) -> bool {
+        if self.core_hash != Some(values_hash(statev)) {
+            return false;
+        }
+        let committed = self.instance.committed_core();
+        if statev.iter().all(|&v| v == 0.0) {
+            let model = &self.material.model;
+            let virgin = model.core_of(&model.new_state());
+            let mut values = vec![0.0; statev.len()];
+            let (sizes, fingerprint) = (model.state_sizes(), model.fingerprint());
+            return statev::write(&virgin, sizes, fingerprint, &mut values).is_ok()
+                && encodes_to(&committed, self, None, &values);
+        }
+        encodes_to(&committed, self, self.core_time, statev)
+    }
+
+    /// Whether `statev` are the values written for the pending trial.
+    fn holds_trial(&self, statev: &[f64]) -> bool {
+        self.trial_hash == Some(values_hash(statev))
+            && (self.instance.trial_core())
+                .is_ok_and(|core| encodes_to(&core, self, self.trial_time, statev))
+    }
+
+    /// The pending trial's values (at [`Point::trial_time`]) into `out`.
+    fn write_trial(&self, out: &mut [f64]) -> crate::Result<()> {
+        let model = &self.material.model;
+        let mut core = self.instance.trial_core()?;
+        core.time = self.trial_time;
+        statev::write(&core, model.state_sizes(), model.fingerprint(), out)
     }
 
     /// Applies the increment protocol before a call of `inc`; returns (committed,
@@ -421,6 +458,36 @@ impl Point {
         self.failed = false;
         Ok((committed, reverted))
     }
+}
+
+thread_local! {
+    /// This thread's buffer for re-encoded `STATEV` values ([`encodes_to`]).
+    static VALUES: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+}
+
+/// A hash of `values`' bits (not cryptographic: a quick filter before [`encodes_to`]).
+fn values_hash(values: &[f64]) -> u64 {
+    values.iter().fold(0xcbf2_9ce4_8422_2325, |h: u64, v| {
+        (h.rotate_left(5) ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// Whether `core` at `time`, encoded for point `p`'s model, is `statev` bit for bit.
+fn encodes_to(core: &statev::Core, p: &Point, time: Option<f64>, statev: &[f64]) -> bool {
+    let model = &p.material.model;
+    let mut core = core.clone();
+    core.time = time;
+    VALUES
+        .try_with(|v| {
+            let mut v = v.borrow_mut();
+            v.clear();
+            v.resize(statev.len(), 0.0);
+            statev::write(&core, model.state_sizes(), model.fingerprint(), &mut v).is_ok()
+                && v.iter()
+                    .map(|x| x.to_bits())
+                    .eq(statev.iter().map(|x| x.to_bits()))
+        })
+        .unwrap_or(false)
 }
 
 type MaterialEntry = Result<Arc<Material>, Arc<Error>>;
@@ -697,6 +764,11 @@ impl Umat {
         timed: bool,
     ) -> crate::Result<Outcome> {
         let n = p.material.model.statev_len();
+        // The host keeps the committed state: implicit points keep no full trial, unless
+        // `MESORVE_UMAT_VTK` writes the point's fields from it.
+        let dumped = self.vtk.as_ref().is_some_and(|v| v.chooses(c.noel, c.npt));
+        p.instance
+            .set_lean(p.material.model.solver.integration != Integration::Implex && !dumped);
         let (r, solved) = self.statev_answer(p, c, &out.statev[..n], timed)?;
         write_outputs(p, c, &r, out, Some(n))?;
         vtk_dump::at_answer(&self.vtk, &p.instance, c);
@@ -720,6 +792,7 @@ impl Umat {
         if !p.key.matches(c) {
             self.rebind(&mut p, c, out.statev.len())?;
         }
+        p.instance.set_lean(false);
         let material = p.material.clone();
         let with_material = |e: Error| Failed {
             error: Arc::new(e),
@@ -784,20 +857,13 @@ impl Umat {
     ) -> crate::Result<(Response, bool)> {
         let strain = call_strain(p, c)?;
         let model = p.material.model.clone();
-        let same = |kept: &Option<Vec<f64>>| {
-            kept.as_ref().is_some_and(|k| {
-                k.iter()
-                    .map(|v| v.to_bits())
-                    .eq(statev.iter().map(|v| v.to_bits()))
-            })
-        };
-        if !same(&p.core_values) {
-            p.core_values = None;
+        if !p.holds_core(statev) {
+            p.core_hash = None;
             let implex = model.solver.integration == Integration::Implex;
             // IMPL-EX: the host kept the point's last trial, which is the state those values
             // expand to plus the step kept for carrying over (whose answers are the same
             // bit for bit): it is committed instead of rebuilt.
-            if implex && same(&p.trial_values) && p.instance.commit().is_ok() {
+            if implex && p.holds_trial(statev) && p.instance.commit().is_ok() {
                 p.core_time = p.trial_time;
             } else {
                 let stored = statev::read(
@@ -814,26 +880,19 @@ impl Umat {
                 with_workspace(&model, |ws| p.instance.load_core(core.as_ref(), ws))?;
                 self.loads.fetch_add(1, Ordering::Relaxed);
             }
-            p.core_values = Some(statev.to_vec());
+            p.core_hash = Some(values_hash(statev));
         }
         let virgin = statev.iter().all(|&v| v == 0.0);
         check_start_strain(p, c, virgin, timed)?;
-        p.trial_values = None;
+        p.trial_hash = None;
         let request = p.material.tangent;
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         })?;
         let mut written = vec![0.0; statev.len()];
-        let mut core = p.instance.trial_core()?;
-        core.time = timed.then(|| c.time[1] + c.dtime);
-        p.trial_time = core.time;
-        statev::write(
-            &core,
-            model.state_sizes(),
-            model.fingerprint(),
-            &mut written,
-        )?;
-        p.trial_values = Some(written);
+        p.trial_time = timed.then(|| c.time[1] + c.dtime);
+        p.write_trial(&mut written)?;
+        p.trial_hash = Some(values_hash(&written));
         let solved = r.report.answer != Answer::Repeated;
         let counter = if solved { &self.solves } else { &self.repeats };
         counter.fetch_add(1, Ordering::Relaxed);
@@ -1024,20 +1083,13 @@ fn slot_material(table: u64, c: &UmatCall) -> Option<Arc<Material>> {
 /// whose pending trial's values are, else the least recently used one), or `None`. The
 /// caller puts it back with [`put_slot`]; a panic in between drops it.
 fn take_slot(table: u64, material: &Arc<Material>, statev: &[f64]) -> Option<Point> {
-    let holds = |kept: &Option<Vec<f64>>| {
-        kept.as_ref().is_some_and(|k| {
-            k.iter()
-                .map(|v| v.to_bits())
-                .eq(statev.iter().map(|v| v.to_bits()))
-        })
-    };
     SLOTS
         .try_with(|slots| {
             let slots = &mut slots.borrow_mut().1;
             let ours = |s: &Slot| s.table == table && Arc::ptr_eq(&s.point.material, material);
             let find = |f: &dyn Fn(&Slot) -> bool| slots.iter().position(|s| ours(s) && f(s));
-            let pick = find(&|s| holds(&s.point.core_values))
-                .or_else(|| find(&|s| holds(&s.point.trial_values)))
+            let pick = find(&|s| s.point.holds_core(statev))
+                .or_else(|| find(&|s| s.point.holds_trial(statev)))
                 .or_else(|| {
                     let mine = slots.iter().enumerate().filter(|(_, s)| ours(s));
                     mine.min_by_key(|(_, s)| s.stamp).map(|(i, _)| i)
@@ -1083,8 +1135,8 @@ fn lock<'p>(point: &'p PointRef, c: &UmatCall) -> crate::Result<MutexGuard<'p, P
             p.instance.revert();
             p.last = None;
             p.failed = true;
-            p.core_values = None;
-            p.trial_values = None;
+            p.core_hash = None;
+            p.trial_hash = None;
             p.core_time = None;
             p.trial_time = None;
             Ok(p)
@@ -1206,15 +1258,14 @@ fn write_outputs(
     let material = &p.material;
     let plane = PlaneResponse::from(r);
     let h = c.hypothesis;
+    let mut written = vec![0.0; statev_len.unwrap_or(0)];
+    if statev_len.is_some() {
+        p.write_trial(&mut written)?;
+    }
     h.host_stress(&plane, out.stress)?;
     h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)?;
-    let mirrors_at = match (statev_len, &p.trial_values) {
-        (Some(len), Some(values)) => {
-            out.statev[..len].copy_from_slice(values);
-            len
-        }
-        _ => 0,
-    };
+    out.statev[..written.len()].copy_from_slice(&written);
+    let mirrors_at = written.len();
     let room = out.statev.len() - mirrors_at;
     let mirrors = mirrors(
         p.id,

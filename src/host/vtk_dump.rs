@@ -204,10 +204,15 @@ impl VtkDump {
         format!("e{noel}_p{npt}.pvd")
     }
 
+    /// Whether the point `(noel, npt)` is one whose fields are written.
+    pub fn chooses(&self, noel: i32, npt: i32) -> bool {
+        self.spec.points.contains(&(noel, npt))
+    }
+
     /// After an answer of the UMAT: the fields of `instance`'s trial when the call's point
     /// is chosen. Never fails: a failure is counted and said once.
     pub fn at_answer(&self, instance: &Instance, c: &UmatCall) {
-        if !self.spec.points.contains(&(c.noel, c.npt)) {
+        if !self.chooses(c.noel, c.npt) {
             return;
         }
         if let Err(e) = self.write(instance, c) {

@@ -4,6 +4,7 @@
 //! of [`crate::state::persist`]).
 
 use std::borrow::Cow;
+use std::cell::RefCell;
 use std::sync::Arc;
 
 use super::rve_model::{Model, Response};
@@ -30,12 +31,22 @@ use crate::state::{Core, State};
 /// trial needs no buffers: committing one releases the trial state, so that an instance
 /// that stays on its linear branches (unloaded, or closed in compression) holds one
 /// state plus the fast path's data; its next full update allocates the trial again.
+///
+/// A *lean* instance ([`set_lean`](Self::set_lean), implicit integration) solves its
+/// trial in a per-thread scratch state and keeps only the trial's core (strain,
+/// history, contact status): for a host that keeps the committed state itself and never
+/// commits the trial (the UMAT's `STATEV` mode), 2.3 KB instead of a second full state.
 #[derive(Debug)]
 pub struct Instance {
     model: Arc<Model>,
     committed: State,
-    /// The last full trial's buffers; `None` until the first full update.
-    trial: Option<State>,
+    /// The last full trial's buffers; `None` until the first full update, and in a lean
+    /// instance.
+    trial: Option<Box<State>>,
+    /// A lean instance: full trials are solved in [`SCRATCH`] and kept as `lean_core`.
+    lean: bool,
+    /// The pending lean trial's core.
+    lean_core: Option<Box<Core>>,
     /// The trial awaiting commit or revert, if any.
     pending: Pending,
     /// The response of the pending trial, for a repeated call.
@@ -80,6 +91,8 @@ impl Instance {
             model,
             committed,
             trial: None,
+            lean: false,
+            lean_core: None,
             pending: Pending::Nothing,
             last: None,
             fast_updates: 0,
@@ -178,13 +191,39 @@ impl Instance {
                 self.pending = Pending::Fast(strain);
                 response
             }
+            None if self.lean => {
+                let (response, core) = with_scratch(model, |trial| {
+                    let response = model.update(&self.committed, strain, ws, trial, request)?;
+                    Ok((response, model.core_of(trial)))
+                })?;
+                self.lean_core = Some(Box::new(core));
+                self.pending = Pending::Solved;
+                response
+            }
             None => {
-                let trial = self.trial.get_or_insert_with(|| model.new_state());
+                let trial = self
+                    .trial
+                    .get_or_insert_with(|| Box::new(model.new_state()));
                 let response = model.update(&self.committed, strain, ws, trial, request)?;
                 self.pending = Pending::Solved;
                 response
             }
         })
+    }
+
+    /// Makes this instance lean (see [`Instance`]) or not; the pending trial, if any, is
+    /// discarded when that changes. Lean applies to implicit integration: an IMPL-EX
+    /// instance keeps its full trial (its `STATEV`-mode host commits it, and its kept
+    /// step carries over). A lean instance's solved trial cannot be committed
+    /// ([`commit`](Self::commit) answers `NoTrial`): its host keeps the state, which
+    /// [`load_core`](Self::load_core) expands.
+    pub(crate) fn set_lean(&mut self, lean: bool) {
+        if self.lean != lean {
+            self.revert();
+            self.trial = None;
+            self.lean_core = None;
+            self.lean = lean;
+        }
     }
 
     /// The IMPL-EX update: the step kept from an earlier update of this step (same
@@ -200,7 +239,9 @@ impl Instance {
         let ratio = implex::step_ratio(self.committed.implex.step, dt).to_bits();
         let reuse = model.solver.fast_path && self.implex_step == Some(ratio);
         let carry = !reuse && model.solver.fast_path && implex::carries_over(&self.committed);
-        let trial = self.trial.get_or_insert_with(|| model.new_state());
+        let trial = self
+            .trial
+            .get_or_insert_with(|| Box::new(model.new_state()));
         if carry {
             trial.linear.copy_from(&self.committed.linear);
             trial.unknowns.copy_from_slice(&self.committed.unknowns);
@@ -269,6 +310,7 @@ impl Instance {
             }
         }
         match (self.pending, &mut self.trial) {
+            (Pending::Solved, _) if self.lean_core.is_some() => return Err(Error::NoTrial),
             (Pending::Solved, Some(trial)) => {
                 std::mem::swap(&mut self.committed, trial);
                 self.implex_step = None;
@@ -293,6 +335,7 @@ impl Instance {
     pub fn revert(&mut self) {
         self.pending = Pending::Nothing;
         self.last = None;
+        self.lean_core = None;
     }
 
     /// Back to the virgin state, as a new instance (the trial's buffers are released).
@@ -383,6 +426,9 @@ impl Instance {
     /// there is no pending trial.
     pub fn trial_core(&self) -> Result<Core> {
         match (self.pending, &self.trial) {
+            (Pending::Solved, _) if self.lean_core.is_some() => {
+                Ok(self.lean_core.as_deref().cloned().ok_or(Error::NoTrial)?)
+            }
             (Pending::Solved, Some(trial)) => Ok(self.model.core_of(trial)),
             (Pending::Fast(strain), _) => {
                 let mut core = self.model.core_of(&self.committed);
@@ -421,14 +467,100 @@ impl Instance {
     /// none: the history of the state a host keeps after this update (as
     /// [`trial_core`](Self::trial_core) writes it). Allocates nothing.
     pub fn trial_history(&self) -> &[f64] {
-        match (self.pending, &self.trial) {
-            (Pending::Solved, Some(trial)) => &trial.history,
+        match (self.pending, &self.lean_core, &self.trial) {
+            (Pending::Solved, Some(core), _) => &core.history,
+            (Pending::Solved, None, Some(trial)) => &trial.history,
             _ => &self.committed.history,
         }
     }
 
+    /// The committed state's core (see `crate::state::statev`), at the strain the state
+    /// is committed at.
+    pub fn committed_core(&self) -> Core {
+        self.model.core_of(&self.committed)
+    }
+
     /// Bytes owned by this instance (committed and, once allocated, trial states).
     pub fn state_bytes(&self) -> usize {
-        self.committed.bytes() + self.trial.as_ref().map_or(0, State::bytes)
+        self.committed.bytes()
+            + self.trial.as_deref().map_or(0, State::bytes)
+            + self.lean_core.as_deref().map_or(0, Core::bytes)
+    }
+}
+
+thread_local! {
+    /// This thread's trial states of lean instances, one per model (the most recently
+    /// used [`SCRATCH_MODELS`] models).
+    static SCRATCH: RefCell<Vec<(u64, State)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Models whose scratch trial a thread keeps.
+const SCRATCH_MODELS: usize = 4;
+
+/// `f` on this thread's scratch trial state of `model` (a new state when the thread has
+/// none). Its content is another instance's last trial: an update overwrites all of it
+/// (`State::copy_solution_from`, the fast path's data marked not valid) before it reads
+/// any. The state is out of [`SCRATCH`] while `f` runs, so a panic drops it.
+fn with_scratch<T>(model: &Model, f: impl FnOnce(&mut State) -> Result<T>) -> Result<T> {
+    let take = |states: &mut Vec<(u64, State)>| {
+        let at = states.iter().position(|(id, _)| *id == model.id)?;
+        Some(states.remove(at).1)
+    };
+    let kept = SCRATCH
+        .try_with(|s| take(&mut s.borrow_mut()))
+        .ok()
+        .flatten();
+    let mut state = kept.unwrap_or_else(|| model.new_state());
+    let result = f(&mut state);
+    let _ = SCRATCH.try_with(|s| {
+        let mut states = s.borrow_mut();
+        if states.len() >= SCRATCH_MODELS {
+            states.remove(0);
+        }
+        states.push((model.id, state));
+    });
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::cache;
+    use crate::scene::DEFAULT_SCENE_TOML;
+
+    /// A lean instance answers bit for bit as a full one along a loading path followed as
+    /// a `STATEV` host does (each increment's trial core expanded as the next committed
+    /// state, with a second iteration from the same committed state), writes the same
+    /// cores, and holds no second full state.
+    #[test]
+    fn a_lean_instance_answers_as_a_full_one_with_less_memory() {
+        let model = cache::model_for_text(DEFAULT_SCENE_TOML, None).unwrap();
+        let mut ws = model.workspace();
+        let (mut full, mut lean) = (Instance::new(model.clone()), Instance::new(model.clone()));
+        lean.set_lean(true);
+        for k in 1..=4 {
+            let mut cores = Vec::new();
+            for inst in [&mut full, &mut lean] {
+                let mut answers = Vec::new();
+                for x in [0.9, 1.0] {
+                    let strain = [x * 4e-5 * k as f64, -1e-5 * k as f64, 2e-5];
+                    let r = inst
+                        .update(strain, &mut ws, TangentRequest::Consistent)
+                        .unwrap();
+                    answers.push((r.stress.map(f64::to_bits), r.tangent.map(f64::to_bits)));
+                }
+                cores.push((
+                    answers,
+                    inst.trial_core().unwrap(),
+                    inst.trial_history().to_vec(),
+                ));
+            }
+            assert_eq!(cores[0], cores[1], "increment {k}");
+            assert!(lean.state_bytes() + 5000 < full.state_bytes());
+            assert!(matches!(lean.commit(), Err(Error::NoTrial)));
+            for inst in [&mut full, &mut lean] {
+                inst.load_core(Some(&cores[0].1), &mut ws).unwrap();
+            }
+        }
     }
 }

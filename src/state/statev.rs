@@ -110,6 +110,13 @@ impl From<CoreV1> for Core {
 }
 
 impl Core {
+    /// Heap and inline bytes of this core.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of::<Self>()
+            + (self.history.capacity() + self.previous.capacity()) * std::mem::size_of::<f64>()
+            + self.closed.capacity() * std::mem::size_of::<u64>()
+    }
+
     /// Whether point `point` is closed.
     pub fn is_closed(&self, point: usize) -> bool {
         self.closed
