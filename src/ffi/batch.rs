@@ -11,7 +11,7 @@ use super::status::RveStatus;
 use crate::model::batch::{
     update_batch, BatchOutputs, BatchPoint, BatchStep, Failures, PointReport,
 };
-use crate::model::Response;
+use crate::model::{Instance, Response};
 use crate::solver::TangentRequest;
 
 /// Per-point report of `rve_update_batch_timed`.
@@ -64,6 +64,11 @@ struct HandlePoint(RveHandle);
 
 impl BatchPoint for HandlePoint {
     type Error = Failure;
+    fn with_instance<R>(&mut self, f: impl FnOnce(&mut Instance) -> R) -> Option<R> {
+        let entry = registry::get(self.0).ok()?;
+        let mut instance = entry.lock().ok()?;
+        Some(f(&mut instance))
+    }
     fn update_point(
         &mut self,
         strain: [f64; 3],
