@@ -374,8 +374,8 @@ fn follow<P: BatchPoint>(
     left[j]
         .with_instance(|a| {
             let tol = share::tolerance(a.model())?;
-            let switched = a.trial_switched();
-            if !share::keeps_share(indicator, tol, anchor, &eps_a, &eps, switched) {
+            let (switched, grew) = (a.trial_switched(), share::grew(tol, a));
+            if !share::keeps_share(indicator, tol, anchor, &eps_a, &eps, switched, grew) {
                 return None;
             }
             let r = share::corrected(anchor, &eps_a, &eps);

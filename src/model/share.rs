@@ -45,16 +45,27 @@ pub const STRAIN_FLOOR: f64 = 1e-5;
 /// RVE's peak stress (about 4e-4 mm).
 pub const H_FLOOR: f64 = 4e-6;
 
+/// Strains closer than this fraction of the anchor's count as the same strain (round-off
+/// of a host's sums, as the `STATEV` strain check's `1e-9`): a damaging anchor still
+/// lends its answer to a point at its own strain (CalculiX's twin point layers).
+pub const ROUND_OFF: f64 = 1e-9;
+
 /// When a follower gets its own solve back (measured in `docs/sharing.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Indicator {
     /// Only when the anchor failed or was not reliable.
     Plain,
-    /// Also when the first-order term is large against the anchor's stress (the default).
-    #[default]
+    /// Also when the first-order term is large against the anchor's stress.
     FirstOrder,
     /// Also when the anchor's increment switched an ITZ point's contact status.
     Branch,
+    /// [`Indicator::FirstOrder`], and also when the anchor's increment grew its interface
+    /// history by more than `tol` times its size (the anchor is damaging: the follower's
+    /// own growth, which the first-order correction does not carry, would differ) and the
+    /// strains differ beyond round-off ([`ROUND_OFF`]). The default: the one measured to
+    /// stay within `tol` of the exact run (`docs/sharing.md`).
+    #[default]
+    History,
 }
 
 /// The sharing tolerance of `model`'s scene (`None`: no sharing).
@@ -111,7 +122,7 @@ pub fn corrected(anchor: &Response, anchor_strain: &[f64; 3], eps: &[f64; 3]) ->
 
 /// Whether a follower at `eps` may keep the anchor's answer (the error indicator; see
 /// the module documentation). `switched`: the anchor's increment switched a contact
-/// status.
+/// status; `grew`: it grew its history ([`grew`]).
 pub fn keeps_share(
     indicator: Indicator,
     tol: f64,
@@ -119,6 +130,7 @@ pub fn keeps_share(
     anchor_strain: &[f64; 3],
     eps: &[f64; 3],
     switched: bool,
+    grew: bool,
 ) -> bool {
     let report = &anchor.report;
     if report.substepped() || report.step_too_large || report.exceeds_tolerance() {
@@ -134,7 +146,17 @@ pub fn keeps_share(
     if norm(&term) > reach {
         return false;
     }
-    indicator != Indicator::Branch || !switched
+    match indicator {
+        Indicator::Branch => !switched,
+        Indicator::History => !grew || norm(&d) <= ROUND_OFF * norm(anchor_strain),
+        _ => true,
+    }
+}
+
+/// Whether `instance`'s pending trial grew its interface history beyond `tol` times
+/// its size ([`H_FLOOR`] at least) against the committed state.
+pub fn grew(tol: f64, instance: &Instance) -> bool {
+    !close(tol, instance.trial_history(), &instance.committed().history, H_FLOOR)
 }
 
 /// Whether `instance`'s pending trial switched the contact status of an ITZ point
