@@ -14,6 +14,7 @@
 pub mod hypothesis;
 pub mod material;
 pub mod mirrors;
+mod share_table;
 pub mod umat;
 
 pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};

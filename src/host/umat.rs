@@ -96,7 +96,10 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockEr
 
 use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, UmatScene};
-use super::mirrors::{mirrors, MIRRORS};
+use super::mirrors::{mirrors, mirrors_of, MIRRORS};
+use super::share_table::{Anchor, IncrementKey, ShareTable};
+use crate::model::share;
+use crate::solver::TangentRequest;
 use crate::error::Error;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
@@ -222,6 +225,9 @@ pub struct UmatStats {
     /// increment, and after any change the host made to the values).
     pub loads: u64,
     pub failures: u64,
+    /// `STATEV` mode with `[solver] share_tolerance`: calls answered from another point
+    /// of the increment (answer sharing, `docs/sharing.md`) instead of solving.
+    pub shared: u64,
     /// Points in the table.
     pub points: u64,
 }
@@ -510,6 +516,9 @@ pub struct Umat {
     reverts: AtomicU64,
     loads: AtomicU64,
     failures: AtomicU64,
+    shared: AtomicU64,
+    /// Answer sharing's per-increment tables (`share_table`).
+    share: ShareTable,
 }
 
 /// The process's table, searching scenes on `MESORVE_SCENE_PATH` (read at the first
@@ -549,6 +558,8 @@ impl Umat {
             reverts: AtomicU64::new(0),
             loads: AtomicU64::new(0),
             failures: AtomicU64::new(0),
+            shared: AtomicU64::new(0),
+            share: ShareTable::default(),
         }
     }
 
@@ -566,6 +577,7 @@ impl Umat {
             reverts: get(&self.reverts),
             loads: get(&self.loads),
             failures: get(&self.failures),
+            shared: get(&self.shared),
             points: self
                 .points
                 .read()
@@ -680,8 +692,19 @@ impl Umat {
         timed: bool,
     ) -> crate::Result<Outcome> {
         let n = p.material.model.statev_len();
+        if timed {
+            if let Some((r, history)) = self.shared_answer(p, c, &out.statev[..n])? {
+                write_outputs(p, c, &r, out, Some(n), Some(&history))?;
+                return Ok(Outcome {
+                    solved: false,
+                    committed: false,
+                    reverted: false,
+                    iterations: 0,
+                });
+            }
+        }
         let (r, solved) = self.statev_answer(p, c, &out.statev[..n], timed)?;
-        write_outputs(p, c, &r, out, Some(n))?;
+        write_outputs(p, c, &r, out, Some(n), None)?;
         Ok(Outcome {
             solved,
             committed: false,
@@ -721,7 +744,7 @@ impl Umat {
             p.failed = true;
             with_material(e)
         })?;
-        write_outputs(&p, c, &r, out, None).map_err(with_material)?;
+        write_outputs(&p, c, &r, out, None, None).map_err(with_material)?;
         Ok(Outcome {
             solved,
             committed,
@@ -748,6 +771,54 @@ impl Umat {
         });
         p.last = r.as_ref().ok().map(|r| (strain, *r));
         Ok((r?, true))
+    }
+
+    /// `STATEV` mode with answer sharing (`share_table`): the answer of an anchor of
+    /// this increment that the point's committed core (decoded from `statev`) and strain
+    /// match, corrected to first order, with the anchor's trial core at the point's own
+    /// strain and time as the values to write (`p.trial_values`), and the written
+    /// history (for the mirrors); `None`: the point solves (no sharing, no anchor, or
+    /// values the normal path refuses with its message). The point's instance is not
+    /// rebuilt: its pending trial is dropped, so the next increment rebuilds it from the
+    /// values if it solves.
+    fn shared_answer(
+        &self,
+        p: &mut Point,
+        c: &UmatCall,
+        statev: &[f64],
+    ) -> crate::Result<Option<(Response, Vec<f64>)>> {
+        let Some(tol) = sharing(p) else {
+            return Ok(None);
+        };
+        let model = p.material.model.clone();
+        let own = p.core_values.as_ref().is_some_and(|k| {
+            k.iter().map(|v| v.to_bits()).eq(statev.iter().map(|v| v.to_bits()))
+        });
+        if own && p.instance.has_trial() {
+            return Ok(None);
+        }
+        let strain = call_strain(p, c)?;
+        let sizes = model.state_sizes();
+        let core = match statev::read(statev, sizes, model.interface_points(), model.fingerprint()) {
+            Ok(Some(s)) if s.verified => s.core,
+            Ok(None) => model.core_of(&model.new_state()),
+            _ => return Ok(None),
+        };
+        if !start_matches(&model, c, &core)? {
+            return Ok(None);
+        }
+        let time = Some(c.time[1] + c.dtime);
+        let found = self.share.follow(&model, increment_key(c), tol, (&core, strain, time));
+        let Some((r, written_core)) = found else {
+            return Ok(None);
+        };
+        let mut written = vec![0.0; statev.len()];
+        statev::write(&written_core, sizes, model.fingerprint(), &mut written)?;
+        p.instance.revert();
+        p.trial_values = Some(written);
+        p.trial_time = time;
+        self.shared.fetch_add(1, Ordering::Relaxed);
+        Ok(Some((r, written_core.history)))
     }
 
     /// `STATEV` mode: the answer from the committed state `statev` holds (the host's
@@ -816,6 +887,15 @@ impl Umat {
         )?;
         p.trial_values = Some(written);
         let solved = r.report.answer != Answer::Repeated;
+        if solved && timed && sharing(p).is_some() {
+            let anchor = Anchor {
+                committed: model.core_of(p.instance.committed()),
+                strain,
+                response: r,
+                trial: core,
+            };
+            self.share.insert(&model, increment_key(c), anchor);
+        }
         let counter = if solved { &self.solves } else { &self.repeats };
         counter.fetch_add(1, Ordering::Relaxed);
         Ok((r, solved))
@@ -1160,6 +1240,34 @@ fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool, timed: bool) -> cra
     })
 }
 
+/// The sharing tolerance of the point's material, when it shares: `[solver]
+/// share_tolerance` and the consistent tangent returned (the first-order correction needs
+/// it; `PROPS(6)` may ask for another).
+fn sharing(p: &Point) -> Option<f64> {
+    let tol = share::tolerance(&p.material.model)?;
+    (p.material.tangent == TangentRequest::Consistent).then_some(tol)
+}
+
+/// The share table's increment of a call.
+fn increment_key(c: &UmatCall) -> IncrementKey {
+    (c.time[1].to_bits(), c.dtime.to_bits(), c.kstep)
+}
+
+/// Whether a decoded core passes the checks of the start of the increment (strain and
+/// time, as [`check_start_strain`]); a core that does not is left to the normal path,
+/// which refuses it with its message.
+fn start_matches(model: &crate::Model, c: &UmatCall, core: &statev::Core) -> crate::Result<bool> {
+    let spec = model.scene().spec.statev;
+    let host = c.hypothesis.rve_strain(c.stran)?;
+    if spec.check_strain && strain_mismatch(core.strain, host).is_some() {
+        return Ok(false);
+    }
+    let late = core.time.is_some_and(|end| {
+        (c.time[1] - end).abs() > TIME_ROUNDOFF * (end.abs() + c.dtime.abs())
+    });
+    Ok(!(spec.check_time && late))
+}
+
 /// Says once per process that `STATEV` is too short to hold the state.
 fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
     warn_once(&TABLE_NOTE, || {
@@ -1183,6 +1291,7 @@ fn write_outputs(
     r: &Response,
     out: &mut UmatOutputs,
     statev_len: Option<usize>,
+    shared_history: Option<&[f64]>,
 ) -> crate::Result<()> {
     let material = &p.material;
     let plane = PlaneResponse::from(r);
@@ -1197,13 +1306,22 @@ fn write_outputs(
         _ => 0,
     };
     let room = out.statev.len() - mirrors_at;
-    let mirrors = mirrors(
-        p.id,
-        r.report.iterations,
-        r.report.substeps,
-        &p.instance,
-        room,
-    );
+    let mirrors = match shared_history {
+        Some(h) => mirrors_of(
+            p.id,
+            r.report.iterations,
+            r.report.substeps,
+            (&material.model, h),
+            room,
+        ),
+        None => mirrors(
+            p.id,
+            r.report.iterations,
+            r.report.substeps,
+            &p.instance,
+            room,
+        ),
+    };
     for (s, m) in out.statev[mirrors_at..].iter_mut().zip(mirrors) {
         *s = m;
     }

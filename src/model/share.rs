@@ -33,7 +33,7 @@
 //! status of an ITZ point (the follower may lie on the other side of the switch).
 
 use super::{Instance, Model, Response};
-use crate::state::State;
+use crate::state::{Core, State};
 
 /// The strain scale below which strains count as equal to within `tol` times it: a tenth
 /// of the paper's concrete's tensile peak strain (about 1.3e-4), so that points near zero
@@ -105,6 +105,15 @@ pub fn states_close(tol: f64, point: &State, anchor: &State) -> bool {
         && point.implex.step.to_bits() == anchor.implex.step.to_bits()
         && close(tol, &point.history, &anchor.history, H_FLOOR)
         && close(tol, &point.implex.previous, &anchor.implex.previous, H_FLOOR)
+}
+
+/// [`states_close`] for two `STATEV` cores (the UMAT's table, `crate::host`).
+pub fn cores_close(tol: f64, point: &Core, anchor: &Core) -> bool {
+    point.closed == anchor.closed
+        && point.at_start == anchor.at_start
+        && point.step.to_bits() == anchor.step.to_bits()
+        && close(tol, &point.history, &anchor.history, H_FLOOR)
+        && close(tol, &point.previous, &anchor.previous, H_FLOOR)
 }
 
 /// The anchor's answer moved to `eps` to first order (see the module documentation).
