@@ -55,7 +55,8 @@ fn run(model: &Arc<Model>, n: usize, indicator: Indicator) -> (Vec<[f64; 3]>, (u
             tangents: Some(&mut tangents),
             reports: &mut reports,
         };
-        let failures = update_batch_with(&mut points, &strains, step, indicator, out).expect("batch");
+        let failures =
+            update_batch_with(&mut points, &strains, step, indicator, out).expect("batch");
         assert!(failures.is_empty());
         points.iter_mut().for_each(|p| p.commit().expect("commit"));
         let (s, f) = share::counts(&reports);
@@ -66,7 +67,9 @@ fn run(model: &Arc<Model>, n: usize, indicator: Indicator) -> (Vec<[f64; 3]>, (u
 }
 
 fn main() {
-    let n: usize = std::env::args().nth(1).map_or(200, |a| a.parse().expect("points"));
+    let n: usize = std::env::args()
+        .nth(1)
+        .map_or(200, |a| a.parse().expect("points"));
     let t0 = std::time::Instant::now();
     let (exact, _) = run(&model(""), n, Indicator::default());
     let exact_time = t0.elapsed().as_secs_f64();
@@ -76,7 +79,12 @@ fn main() {
     println!("|---|---|---|---|---|---|");
     for tol in [0.001, 0.005, 0.02, 0.05] {
         let m = model(&format!("share_tolerance = {tol}"));
-        for indicator in [Indicator::Plain, Indicator::FirstOrder, Indicator::Branch, Indicator::History] {
+        for indicator in [
+            Indicator::Plain,
+            Indicator::FirstOrder,
+            Indicator::Branch,
+            Indicator::History,
+        ] {
             let t0 = std::time::Instant::now();
             let (shared, (solved, followers)) = run(&m, n, indicator);
             let time = t0.elapsed().as_secs_f64();

@@ -83,7 +83,10 @@ fn relative_difference(exact: &Run, shared: &Run) -> f64 {
     let all = |r: &Run| -> Vec<f64> { r.stresses.iter().flatten().flatten().copied().collect() };
     let (a, b) = (all(exact), all(shared));
     let largest = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let diff = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    let diff = a
+        .iter()
+        .zip(&b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
     diff / largest
 }
 
@@ -99,7 +102,12 @@ fn homogeneous_batch_solves_once_per_increment_and_equals_the_exact_run() {
         assert_eq!((solved, followers), (1, 5), "increment {i}");
         assert!(reports[1..].iter().all(|r| r.shared_from == Some(0)));
     }
-    for (a, b) in exact.stresses.iter().flatten().zip(shared.stresses.iter().flatten()) {
+    for (a, b) in exact
+        .stresses
+        .iter()
+        .flatten()
+        .zip(shared.stresses.iter().flatten())
+    {
         assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
     }
 }
@@ -115,10 +123,11 @@ fn heterogeneous_batch_within_the_tolerance_of_the_exact_run() {
     let shared_model = model(&format!("share_tolerance = {tol}"), 4.0);
     let shared = run(&mut instances(&shared_model, SCALES.len()), &SCALES, 2);
     let difference = relative_difference(&exact, &shared);
-    let total: (usize, usize) = shared.reports.iter().map(|r| share::counts(r)).fold(
-        (0, 0),
-        |(a, b), (c, d)| (a + c, b + d),
-    );
+    let total: (usize, usize) = shared
+        .reports
+        .iter()
+        .map(|r| share::counts(r))
+        .fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
     eprintln!("heterogeneous: largest stress difference {difference:.3e} of the largest stress; solved {}, shared {}", total.0, total.1);
     assert!(total.1 > 0, "some points share");
     assert!(difference <= tol, "{difference} > {tol}");
@@ -129,7 +138,12 @@ fn one_and_two_threads_give_the_same_shared_answers() {
     let m = model("share_tolerance = 0.005", 4.0);
     let one = run(&mut instances(&m, SCALES.len()), &SCALES, 1);
     let two = run(&mut instances(&m, SCALES.len()), &SCALES, 2);
-    for (a, b) in one.stresses.iter().flatten().zip(two.stresses.iter().flatten()) {
+    for (a, b) in one
+        .stresses
+        .iter()
+        .flatten()
+        .zip(two.stresses.iter().flatten())
+    {
         assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
     }
     assert_eq!(one.reports, two.reports);
@@ -158,7 +172,10 @@ fn never_shares_across_materials() {
 #[test]
 fn bad_share_tolerance_is_refused_by_name() {
     for bad in ["0.0", "-0.01", "0.5", "nan", "inf"] {
-        let text = SCENE.replace("[solver]\n", &format!("[solver]\nshare_tolerance = {bad}\n"));
+        let text = SCENE.replace(
+            "[solver]\n",
+            &format!("[solver]\nshare_tolerance = {bad}\n"),
+        );
         match Scene::from_toml_str(&text, env!("CARGO_MANIFEST_DIR")) {
             Err(Error::Scene { key, .. }) => assert_eq!(key, "solver.share_tolerance"),
             other => panic!("share_tolerance = {bad}: {other:?}"),

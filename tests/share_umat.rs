@@ -15,7 +15,11 @@ use rve::model::cache;
 fn scene(dir: &std::path::Path, name: &str, extra: &str) -> usize {
     let text = std::fs::read_to_string(common::repo("scenes/paper_rve_host_implex.toml")).unwrap();
     let file = dir.join(format!("{name}.toml"));
-    std::fs::write(&file, text.replace("[solver]\n", &format!("[solver]\n{extra}\n"))).unwrap();
+    std::fs::write(
+        &file,
+        text.replace("[solver]\n", &format!("[solver]\n{extra}\n")),
+    )
+    .unwrap();
     cache::model_for_file(&file).unwrap().statev_len()
 }
 
@@ -47,7 +51,8 @@ fn run(dir: &std::path::Path, cmname: &str, n: usize) -> (Vec<[f64; 3]>, rve::ho
                     statev: &mut written[p],
                     pnewdt: &mut pnewdt,
                 };
-                umat.call(&c, &mut o).unwrap_or_else(|f| panic!("increment {k}: {f}"));
+                umat.call(&c, &mut o)
+                    .unwrap_or_else(|f| panic!("increment {k}: {f}"));
                 last[p] = [stress[0], stress[1], stress[2]];
             }
         }
@@ -67,7 +72,10 @@ fn statev_mode_shares_within_the_tolerance() {
     let (shared, stats) = run(&dir, "SHARED", n);
     assert_eq!(exact_stats.shared, 0);
     assert!(stats.shared > 0, "{stats:?}");
-    assert!(stats.solves < exact_stats.solves, "{stats:?} against {exact_stats:?}");
+    assert!(
+        stats.solves < exact_stats.solves,
+        "{stats:?} against {exact_stats:?}"
+    );
     let largest = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut worst = 0.0f64;
     for (i, (a, b)) in exact.iter().zip(&shared).enumerate() {

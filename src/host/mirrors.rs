@@ -98,7 +98,13 @@ pub fn mirrors(
     instance: &Instance,
     room: usize,
 ) -> [f64; MIRRORS] {
-    mirrors_of(id, iterations, substeps, (instance.model(), instance.trial_history()), room)
+    mirrors_of(
+        id,
+        iterations,
+        substeps,
+        (instance.model(), instance.trial_history()),
+        room,
+    )
 }
 
 /// [`mirrors`] of a model's interface `history` (a shared answer's written state).

@@ -60,8 +60,16 @@ fn log(inc: &Increment) {
 
 impl ShareTable {
     /// The table of `model` at `key`, emptied when the increment changed.
-    fn with<R>(&self, model: &Arc<Model>, key: IncrementKey, f: impl FnOnce(&mut Increment) -> R) -> R {
-        let mut all = self.increments.lock().unwrap_or_else(PoisonError::into_inner);
+    fn with<R>(
+        &self,
+        model: &Arc<Model>,
+        key: IncrementKey,
+        f: impl FnOnce(&mut Increment) -> R,
+    ) -> R {
+        let mut all = self
+            .increments
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
         let i = match all.iter().position(|t| share::same_model(&t.model, model)) {
             Some(i) => i,
             None => {
@@ -105,9 +113,22 @@ impl ShareTable {
                     && share::cores_close(tol, core, &a.committed)
             })?;
             let switched = anchor.trial.closed != anchor.committed.closed;
-            let grew = !share::close(tol, &anchor.trial.history, &anchor.committed.history, share::H_FLOOR);
+            let grew = !share::close(
+                tol,
+                &anchor.trial.history,
+                &anchor.committed.history,
+                share::H_FLOOR,
+            );
             let indicator = Indicator::default();
-            if !share::keeps_share(indicator, tol, &anchor.response, &anchor.strain, &strain, switched, grew) {
+            if !share::keeps_share(
+                indicator,
+                tol,
+                &anchor.response,
+                &anchor.strain,
+                &strain,
+                switched,
+                grew,
+            ) {
                 return None;
             }
             let response = share::corrected(&anchor.response, &anchor.strain, &strain);

@@ -98,12 +98,12 @@ use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, UmatScene};
 use super::mirrors::{mirrors, mirrors_of, MIRRORS};
 use super::share_table::{Anchor, IncrementKey, ShareTable};
-use crate::model::share;
-use crate::solver::TangentRequest;
 use crate::error::Error;
+use crate::model::share;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
 use crate::scene::ZeroAtStrain;
+use crate::solver::TangentRequest;
 use crate::solver::{Answer, Integration};
 use crate::state::statev;
 
@@ -792,14 +792,17 @@ impl Umat {
         };
         let model = p.material.model.clone();
         let own = p.core_values.as_ref().is_some_and(|k| {
-            k.iter().map(|v| v.to_bits()).eq(statev.iter().map(|v| v.to_bits()))
+            k.iter()
+                .map(|v| v.to_bits())
+                .eq(statev.iter().map(|v| v.to_bits()))
         });
         if own && p.instance.has_trial() {
             return Ok(None);
         }
         let strain = call_strain(p, c)?;
         let sizes = model.state_sizes();
-        let core = match statev::read(statev, sizes, model.interface_points(), model.fingerprint()) {
+        let core = match statev::read(statev, sizes, model.interface_points(), model.fingerprint())
+        {
             Ok(Some(s)) if s.verified => s.core,
             Ok(None) => model.core_of(&model.new_state()),
             _ => return Ok(None),
@@ -808,7 +811,9 @@ impl Umat {
             return Ok(None);
         }
         let time = Some(c.time[1] + c.dtime);
-        let found = self.share.follow(&model, increment_key(c), tol, (&core, strain, time));
+        let found = self
+            .share
+            .follow(&model, increment_key(c), tol, (&core, strain, time));
         let Some((r, written_core)) = found else {
             return Ok(None);
         };
@@ -1262,9 +1267,9 @@ fn start_matches(model: &crate::Model, c: &UmatCall, core: &statev::Core) -> cra
     if spec.check_strain && strain_mismatch(core.strain, host).is_some() {
         return Ok(false);
     }
-    let late = core.time.is_some_and(|end| {
-        (c.time[1] - end).abs() > TIME_ROUNDOFF * (end.abs() + c.dtime.abs())
-    });
+    let late = core
+        .time
+        .is_some_and(|end| (c.time[1] - end).abs() > TIME_ROUNDOFF * (end.abs() + c.dtime.abs()));
     Ok(!(spec.check_time && late))
 }
 

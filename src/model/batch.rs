@@ -299,10 +299,7 @@ type Outcome<E> = Option<std::result::Result<Response, E>>;
 /// chosen in index order (a point is an anchor unless an earlier anchor of the same model
 /// matches it, [`share::strains_close`] and [`share::states_close`]); `None` when no
 /// point's scene asks for sharing.
-fn share_plan<P: BatchPoint>(
-    points: &mut [P],
-    strains: &[[f64; 3]],
-) -> Option<Vec<Option<usize>>> {
+fn share_plan<P: BatchPoint>(points: &mut [P], strains: &[[f64; 3]]) -> Option<Vec<Option<usize>>> {
     let models: Vec<Option<(Arc<Model>, f64)>> = points
         .iter_mut()
         .map(|p| {
@@ -328,7 +325,9 @@ fn share_plan<P: BatchPoint>(
             same && share::strains_close(*tol, &strains[k], &strains[j])
                 && left[j]
                     .with_instance(|a| {
-                        me.with_instance(|b| share::states_close(*tol, b.committed(), a.committed()))
+                        me.with_instance(|b| {
+                            share::states_close(*tol, b.committed(), a.committed())
+                        })
                     })
                     .flatten()
                     .unwrap_or(false)
@@ -352,7 +351,11 @@ fn solve_set<P: BatchPoint>(
         m.then(|| solve_point(point, *strain, step))
     };
     if step.threads == 1 {
-        points.iter_mut().zip(strains.iter().zip(mask)).map(solve).collect()
+        points
+            .iter_mut()
+            .zip(strains.iter().zip(mask))
+            .map(solve)
+            .collect()
     } else {
         let pairs = strains.par_iter().zip(mask.par_iter());
         points.par_iter_mut().zip(pairs).map(solve).collect()
@@ -419,10 +422,19 @@ fn shared<P: BatchPoint>(
     let mut tangents = out.tangents.map(|t| t.iter_mut());
     let outs = out.stresses.iter_mut().zip(out.reports.iter_mut());
     let mut failures = Vec::new();
-    for (k, ((first, second), (stress, report))) in results.into_iter().zip(again).zip(outs).enumerate() {
+    for (k, ((first, second), (stress, report))) in
+        results.into_iter().zip(again).zip(outs).enumerate()
+    {
         let tangent = tangents.as_mut().and_then(Iterator::next);
-        let outcome = second.or(first).unwrap_or_else(|| Err(Error::NoTrial.into()));
-        failures.extend(write_point(k, outcome, shared_from[k], (stress, tangent, report)));
+        let outcome = second
+            .or(first)
+            .unwrap_or_else(|| Err(Error::NoTrial.into()));
+        failures.extend(write_point(
+            k,
+            outcome,
+            shared_from[k],
+            (stress, tangent, report),
+        ));
     }
     failures
 }

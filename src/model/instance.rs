@@ -445,7 +445,11 @@ impl Instance {
             let step: [f64; 3] = std::array::from_fn(|i| strain[i] - from[i]);
             let mut moved = vec![0.0; trial.unknowns.len()];
             if trial.sensitivity.times(&step, &mut moved) {
-                trial.unknowns.iter_mut().zip(&moved).for_each(|(x, d)| *x += d);
+                trial
+                    .unknowns
+                    .iter_mut()
+                    .zip(&moved)
+                    .for_each(|(x, d)| *x += d);
             }
         }
         trial.strain = strain;

@@ -104,7 +104,12 @@ pub fn states_close(tol: f64, point: &State, anchor: &State) -> bool {
         && point.implex.at_start == anchor.implex.at_start
         && point.implex.step.to_bits() == anchor.implex.step.to_bits()
         && close(tol, &point.history, &anchor.history, H_FLOOR)
-        && close(tol, &point.implex.previous, &anchor.implex.previous, H_FLOOR)
+        && close(
+            tol,
+            &point.implex.previous,
+            &anchor.implex.previous,
+            H_FLOOR,
+        )
 }
 
 /// [`states_close`] for two `STATEV` cores (the UMAT's table, `crate::host`).
@@ -121,7 +126,9 @@ pub fn corrected(anchor: &Response, anchor_strain: &[f64; 3], eps: &[f64; 3]) ->
     let d: [f64; 3] = std::array::from_fn(|i| eps[i] - anchor_strain[i]);
     let mut r = *anchor;
     for (i, s) in r.stress.iter_mut().enumerate() {
-        *s += (0..3).map(|j| anchor.tangent[3 * i + j] * d[j]).sum::<f64>();
+        *s += (0..3)
+            .map(|j| anchor.tangent[3 * i + j] * d[j])
+            .sum::<f64>();
     }
     r.s_zz += (0..3).map(|j| anchor.s_zz_tangent[j] * d[j]).sum::<f64>();
     r.report.iterations = 0;
@@ -165,7 +172,12 @@ pub fn keeps_share(
 /// Whether `instance`'s pending trial grew its interface history beyond `tol` times
 /// its size ([`H_FLOOR`] at least) against the committed state.
 pub fn grew(tol: f64, instance: &Instance) -> bool {
-    !close(tol, instance.trial_history(), &instance.committed().history, H_FLOOR)
+    !close(
+        tol,
+        instance.trial_history(),
+        &instance.committed().history,
+        H_FLOOR,
+    )
 }
 
 /// Whether `instance`'s pending trial switched the contact status of an ITZ point
