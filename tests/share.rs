@@ -163,8 +163,8 @@ fn never_shares_across_materials() {
     let shared = run(&mut points, &[1.0; 6], 2);
     for reports in &shared.reports {
         assert_eq!(share::counts(reports), (3, 3));
-        for k in 3..6 {
-            assert_eq!(reports[k].shared_from, Some(k - 3));
+        for (k, r) in reports.iter().enumerate().skip(3) {
+            assert_eq!(r.shared_from, Some(k - 3));
         }
     }
 }
