@@ -124,7 +124,8 @@ typedef struct RvePointReport {
   // An `RveReliability` value.
   int32_t reliability;
   // 0: this point was solved itself; `k + 1`: its answer was taken from point `k` of
-  // this batch, corrected to first order. Always 0 in this version.
+  // this batch, corrected to first order (answer sharing: the scene's `[solver]
+  // share_tolerance` and a consistent tangent asked for; docs/sharing.md).
   uint32_t shared_from;
   // < 1: redo the increment smaller; > 1: the next may be larger; 1 otherwise (on a
   // failure: the solver's suggestion, 1 for a failure a smaller step does not mend).
@@ -194,8 +195,8 @@ uint32_t rve_update_batch(const RveHandle *handles,
 // - `reports`: `n` entries or NULL. Entry `k` receives point `k`'s status, its
 //   iterations, sub-steps, factorizations, reliability, `suggested_step_ratio` and
 //   `s_zz` (as `RveInfo`), and `error_estimate`: the IMPL-EX step's error estimate
-//   relative to `solver.step_tolerance` (0 without one); `shared_from` is 0 in this
-//   version.
+//   relative to `solver.step_tolerance` (0 without one); `shared_from`: 0, or `k + 1`
+//   when the point took point `k`'s answer (answer sharing, docs/sharing.md).
 // - `messages`: `n` buffers of `message_len` bytes each, point `k`'s at
 //   `messages + k * message_len`: its failure's message, NUL-terminated and truncated
 //   to `message_len - 1` bytes, or "" for a point that succeeded; or NULL (then
@@ -203,7 +204,8 @@ uint32_t rve_update_batch(const RveHandle *handles,
 //
 // Each point's stress and tangent are written only when it succeeded. `nthreads` and
 // the handles as `rve_update_batch`; the results do not depend on `nthreads` (bit for
-// bit) and equal `rve_update_timed` of each point (bit for bit).
+// bit) and, without `[solver] share_tolerance` in the instances' scene, equal
+// `rve_update_timed` of each point (bit for bit).
 //
 // Returns `OK`, `BATCH_FAILED` (at least one point failed; the first one's message,
 // prefixed with its index, is the thread's last error), or `NULL_ARGUMENT`,

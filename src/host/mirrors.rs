@@ -98,8 +98,25 @@ pub fn mirrors(
     instance: &Instance,
     room: usize,
 ) -> [f64; MIRRORS] {
+    mirrors_of(
+        id,
+        iterations,
+        substeps,
+        (instance.model(), instance.trial_history()),
+        room,
+    )
+}
+
+/// [`mirrors`] of a model's interface `history` (a shared answer's written state).
+pub fn mirrors_of(
+    id: u64,
+    iterations: u32,
+    substeps: u32,
+    (model, history): (&crate::Model, &[f64]),
+    room: usize,
+) -> [f64; MIRRORS] {
     let m = if room > 3 {
-        RveMeasures::of(instance.model(), instance.trial_history())
+        RveMeasures::of(model, history)
     } else {
         RveMeasures::default()
     };

@@ -15,6 +15,7 @@
 pub mod hypothesis;
 pub mod material;
 pub mod mirrors;
+mod share_table;
 pub mod umat;
 pub mod vtk_dump;
 

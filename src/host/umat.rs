@@ -96,12 +96,15 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockEr
 
 use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, UmatScene};
-use super::mirrors::{mirrors, MIRRORS};
+use super::mirrors::{mirrors, mirrors_of, MIRRORS};
+use super::share_table::{Anchor, IncrementKey, ShareTable};
 use super::vtk_dump::{self, VtkDump};
 use crate::error::Error;
+use crate::model::share;
 use crate::model::workspaces::with_workspace;
 use crate::model::{Instance, Response};
 use crate::scene::ZeroAtStrain;
+use crate::solver::TangentRequest;
 use crate::solver::{Answer, Integration};
 use crate::state::statev;
 
@@ -223,6 +226,9 @@ pub struct UmatStats {
     /// increment, and after any change the host made to the values).
     pub loads: u64,
     pub failures: u64,
+    /// `STATEV` mode with `[solver] share_tolerance`: calls answered from another point
+    /// of the increment (answer sharing, `docs/sharing.md`) instead of solving.
+    pub shared: u64,
     /// Points in the table.
     pub points: u64,
 }
@@ -578,6 +584,9 @@ pub struct Umat {
     reverts: AtomicU64,
     loads: AtomicU64,
     failures: AtomicU64,
+    shared: AtomicU64,
+    /// Answer sharing's per-increment tables (`share_table`).
+    share: ShareTable,
     /// `MESORVE_UMAT_VTK`: the RVE fields of chosen points as VTK ([`super::vtk_dump`]).
     vtk: Option<VtkDump>,
 }
@@ -620,6 +629,8 @@ impl Umat {
             reverts: AtomicU64::new(0),
             loads: AtomicU64::new(0),
             failures: AtomicU64::new(0),
+            shared: AtomicU64::new(0),
+            share: ShareTable::default(),
             vtk: None,
         }
     }
@@ -650,6 +661,7 @@ impl Umat {
             reverts: get(&self.reverts),
             loads: get(&self.loads),
             failures: get(&self.failures),
+            shared: get(&self.shared),
             points: self
                 .points
                 .read()
@@ -769,8 +781,20 @@ impl Umat {
         let dumped = self.vtk.as_ref().is_some_and(|v| v.chooses(c.noel, c.npt));
         p.instance
             .set_lean(p.material.model.solver.integration != Integration::Implex && !dumped);
+        // A point whose fields are written solves its own answer.
+        if timed && !dumped {
+            if let Some((r, core)) = self.shared_answer(p, c, &out.statev[..n])? {
+                write_outputs(p, c, &r, out, Some(n), Some(&core))?;
+                return Ok(Outcome {
+                    solved: false,
+                    committed: false,
+                    reverted: false,
+                    iterations: 0,
+                });
+            }
+        }
         let (r, solved) = self.statev_answer(p, c, &out.statev[..n], timed)?;
-        write_outputs(p, c, &r, out, Some(n))?;
+        write_outputs(p, c, &r, out, Some(n), None)?;
         vtk_dump::at_answer(&self.vtk, &p.instance, c);
         Ok(Outcome {
             solved,
@@ -812,7 +836,7 @@ impl Umat {
             p.failed = true;
             with_material(e)
         })?;
-        write_outputs(&p, c, &r, out, None).map_err(with_material)?;
+        write_outputs(&p, c, &r, out, None, None).map_err(with_material)?;
         vtk_dump::at_answer(&self.vtk, &p.instance, c);
         Ok(Outcome {
             solved,
@@ -840,6 +864,51 @@ impl Umat {
         });
         p.last = r.as_ref().ok().map(|r| (strain, *r));
         Ok((r?, true))
+    }
+
+    /// `STATEV` mode with answer sharing (`share_table`): the answer of an anchor of
+    /// this increment that the point's committed core (decoded from `statev`) and strain
+    /// match, corrected to first order, with the anchor's trial core at the point's own
+    /// strain and time (the values to write, and the history for the mirrors); `None`: the
+    /// point solves (no sharing, no anchor, or values the normal path refuses with its
+    /// message). The point's instance is not rebuilt: its pending trial is dropped, so
+    /// the next increment rebuilds it from the values if it solves.
+    fn shared_answer(
+        &self,
+        p: &mut Point,
+        c: &UmatCall,
+        statev: &[f64],
+    ) -> crate::Result<Option<(Response, statev::Core)>> {
+        let Some(tol) = sharing(p) else {
+            return Ok(None);
+        };
+        if p.instance.has_trial() && p.holds_core(statev) {
+            return Ok(None);
+        }
+        let model = p.material.model.clone();
+        let strain = call_strain(p, c)?;
+        let sizes = model.state_sizes();
+        let core = match statev::read(statev, sizes, model.interface_points(), model.fingerprint())
+        {
+            Ok(Some(s)) if s.verified => s.core,
+            Ok(None) => model.core_of(&model.new_state()),
+            _ => return Ok(None),
+        };
+        if !start_matches(&model, c, &core)? {
+            return Ok(None);
+        }
+        let time = Some(c.time[1] + c.dtime);
+        let found = self
+            .share
+            .follow(&model, increment_key(c), tol, (&core, strain, time));
+        let Some((r, written_core)) = found else {
+            return Ok(None);
+        };
+        p.instance.revert();
+        p.trial_hash = None;
+        p.trial_time = time;
+        self.shared.fetch_add(1, Ordering::Relaxed);
+        Ok(Some((r, written_core)))
     }
 
     /// `STATEV` mode: the answer from the committed state `statev` holds (the host's
@@ -894,6 +963,17 @@ impl Umat {
         p.write_trial(&mut written)?;
         p.trial_hash = Some(values_hash(&written));
         let solved = r.report.answer != Answer::Repeated;
+        if solved && timed && sharing(p).is_some() {
+            let mut trial = p.instance.trial_core()?;
+            trial.time = p.trial_time;
+            let anchor = Anchor {
+                committed: p.instance.committed_core(),
+                strain,
+                response: r,
+                trial,
+            };
+            self.share.insert(&model, increment_key(c), anchor);
+        }
         let counter = if solved { &self.solves } else { &self.repeats };
         counter.fetch_add(1, Ordering::Relaxed);
         Ok((r, solved))
@@ -1231,6 +1311,34 @@ fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool, timed: bool) -> cra
     })
 }
 
+/// The sharing tolerance of the point's material, when it shares: `[solver]
+/// share_tolerance` and the consistent tangent returned (the first-order correction needs
+/// it; `PROPS(6)` may ask for another).
+fn sharing(p: &Point) -> Option<f64> {
+    let tol = share::tolerance(&p.material.model)?;
+    (p.material.tangent == TangentRequest::Consistent).then_some(tol)
+}
+
+/// The share table's increment of a call.
+fn increment_key(c: &UmatCall) -> IncrementKey {
+    (c.time[1].to_bits(), c.dtime.to_bits(), c.kstep)
+}
+
+/// Whether a decoded core passes the checks of the start of the increment (strain and
+/// time, as [`check_start_strain`]); a core that does not is left to the normal path,
+/// which refuses it with its message.
+fn start_matches(model: &crate::Model, c: &UmatCall, core: &statev::Core) -> crate::Result<bool> {
+    let spec = model.scene().spec.statev;
+    let host = c.hypothesis.rve_strain(c.stran)?;
+    if spec.check_strain && strain_mismatch(core.strain, host).is_some() {
+        return Ok(false);
+    }
+    let late = core
+        .time
+        .is_some_and(|end| (c.time[1] - end).abs() > TIME_ROUNDOFF * (end.abs() + c.dtime.abs()));
+    Ok(!(spec.check_time && late))
+}
+
 /// Says once per process that `STATEV` is too short to hold the state.
 fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
     warn_once(&TABLE_NOTE, || {
@@ -1245,35 +1353,50 @@ fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
 }
 
 /// Writes `STRESS`, `DDSDDE` and `STATEV`: in `STATEV` mode (`Some(len)`) the trial's
-/// core in `STATEV(1:len)` and the inspection mirrors ([`super::mirrors`]) after it, in
-/// table mode the mirrors from `STATEV(1)`; `PNEWDT` < 1 when
-/// the answer depends on the increment's size.
+/// core (or `shared`, a core shared from another point) in `STATEV(1:len)` and the
+/// inspection mirrors ([`super::mirrors`]) after it, in table mode the mirrors from
+/// `STATEV(1)`; `PNEWDT` < 1 when the answer depends on the increment's size.
 fn write_outputs(
     p: &Point,
     c: &UmatCall,
     r: &Response,
     out: &mut UmatOutputs,
     statev_len: Option<usize>,
+    shared: Option<&statev::Core>,
 ) -> crate::Result<()> {
     let material = &p.material;
     let plane = PlaneResponse::from(r);
     let h = c.hypothesis;
     let mut written = vec![0.0; statev_len.unwrap_or(0)];
-    if statev_len.is_some() {
-        p.write_trial(&mut written)?;
+    match (statev_len, shared) {
+        (None, _) => {}
+        (Some(_), None) => p.write_trial(&mut written)?,
+        (Some(_), Some(core)) => {
+            let model = &material.model;
+            statev::write(core, model.state_sizes(), model.fingerprint(), &mut written)?
+        }
     }
     h.host_stress(&plane, out.stress)?;
     h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)?;
     out.statev[..written.len()].copy_from_slice(&written);
     let mirrors_at = written.len();
     let room = out.statev.len() - mirrors_at;
-    let mirrors = mirrors(
-        p.id,
-        r.report.iterations,
-        r.report.substeps,
-        &p.instance,
-        room,
-    );
+    let mirrors = match shared {
+        Some(core) => mirrors_of(
+            p.id,
+            r.report.iterations,
+            r.report.substeps,
+            (&material.model, &core.history),
+            room,
+        ),
+        None => mirrors(
+            p.id,
+            r.report.iterations,
+            r.report.substeps,
+            &p.instance,
+            room,
+        ),
+    };
     for (s, m) in out.statev[mirrors_at..].iter_mut().zip(mirrors) {
         *s = m;
     }

@@ -480,6 +480,74 @@ impl Instance {
         self.model.core_of(&self.committed)
     }
 
+    /// Answer sharing (`crate::model::share`): makes `anchor`'s pending trial this
+    /// instance's, moved to this point's own `strain` (and its answer `response`, the
+    /// anchor's corrected to first order), as if this instance had solved it: a commit
+    /// accepts it, a revert drops it. The state is the anchor's trial with `strain`, and
+    /// the fluctuation moved along the anchor's sensitivity, `x = x_a + X_a (eps - eps_a)`
+    /// (kept as it is when the fast path's data says at which strain it holds).
+    /// `NoTrial` when the anchor has no pending trial; nothing changes then.
+    pub fn adopt_trial(
+        &mut self,
+        anchor: &Instance,
+        strain: [f64; 3],
+        dt: f64,
+        request: TangentRequest,
+        response: Response,
+    ) -> Result<()> {
+        let source = match (anchor.pending, &anchor.trial) {
+            (Pending::Solved, Some(trial)) => trial,
+            (Pending::Fast(_), _) => &anchor.committed,
+            _ => return Err(Error::NoTrial),
+        };
+        let from = match anchor.pending {
+            Pending::Fast(s) => s,
+            _ => source.strain,
+        };
+        let model = &self.model;
+        let trial = self
+            .trial
+            .get_or_insert_with(|| Box::new(model.new_state()));
+        trial.copy_from(source);
+        if matches!(anchor.pending, Pending::Fast(_)) {
+            trial.curvature.valid = false;
+        }
+        if !trial.linear.valid {
+            let step: [f64; 3] = std::array::from_fn(|i| strain[i] - from[i]);
+            let mut moved = vec![0.0; trial.unknowns.len()];
+            if trial.sensitivity.times(&step, &mut moved) {
+                trial
+                    .unknowns
+                    .iter_mut()
+                    .zip(&moved)
+                    .for_each(|(x, d)| *x += d);
+            }
+        }
+        trial.strain = strain;
+        self.pending = Pending::Solved;
+        self.implex_step = None;
+        self.last = Some(LastTrial {
+            strain,
+            dt,
+            request,
+            response,
+        });
+        Ok(())
+    }
+
+    /// Whether the pending solved trial holds another contact status than the committed
+    /// state at some ITZ point (held points, or IMPL-EX's closed points); false without
+    /// one, and for a fast trial (same status by construction).
+    pub fn trial_switched(&self) -> bool {
+        match (self.pending, &self.trial) {
+            (Pending::Solved, Some(t)) => {
+                t.held_contact != self.committed.held_contact
+                    || t.implex.closed != self.committed.implex.closed
+            }
+            _ => false,
+        }
+    }
+
     /// Bytes owned by this instance (committed and, once allocated, trial states).
     pub fn state_bytes(&self) -> usize {
         self.committed.bytes()

@@ -11,6 +11,7 @@ mod instance;
 mod microstructure;
 mod post;
 mod rve_model;
+pub mod share;
 mod statev;
 pub(crate) mod workspaces;
 

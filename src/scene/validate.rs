@@ -183,6 +183,10 @@ fn validate_mesh(m: &MeshSpec, w: f64, h: f64) -> Result<()> {
     Ok(())
 }
 
+/// The largest `solver.share_tolerance`: beyond a tenth, two points' strains may differ
+/// in direction as well as size, and a first-order correction is no answer.
+const MAX_SHARE_TOLERANCE: f64 = 0.1;
+
 fn validate_solver(s: &SolverSpec) -> Result<()> {
     positive("solver.tolerance", s.tolerance)?;
     if s.tolerance >= 1.0 {
@@ -225,6 +229,18 @@ fn validate_solver(s: &SolverSpec) -> Result<()> {
             return Err(Error::scene(
                 "solver.smallest_step",
                 "is the step control's floor: it needs solver.step_tolerance",
+            ));
+        }
+    }
+    if let Some(t) = s.share_tolerance {
+        positive("solver.share_tolerance", t)?;
+        if t > MAX_SHARE_TOLERANCE {
+            return Err(Error::scene(
+                "solver.share_tolerance",
+                format!(
+                    "must be at most {MAX_SHARE_TOLERANCE} (a relative distance between two \
+                     points' strains and histories), got {t}"
+                ),
             ));
         }
     }

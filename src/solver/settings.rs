@@ -75,6 +75,14 @@ pub struct Settings {
     /// "increment size smaller than minimum"); see `docs/step_control.md`. Absent: no floor.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub smallest_step: Option<f64>,
+    /// Answer sharing (see `crate::model::share` and `docs/sharing.md`): within one host
+    /// increment, a point whose committed state and strain lie within this relative
+    /// tolerance of a point already solved takes that point's answer corrected to first
+    /// order with its tangent, `sigma = sigma_a + D_a (eps - eps_a)`, instead of solving.
+    /// In (0, 0.1]. Absent (the default): every point solves its own RVE, bit for bit as
+    /// without the key.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub share_tolerance: Option<f64>,
 }
 
 impl Default for Settings {
@@ -94,6 +102,7 @@ impl Default for Settings {
             step_check: true,
             step_tolerance: None,
             smallest_step: None,
+            share_tolerance: None,
         }
     }
 }
