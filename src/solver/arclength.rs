@@ -72,8 +72,8 @@
 //! clear again. Its point is accepted like any other; one past the target lands from the
 //! interpolation. Measured in `docs/solver.md`: on the robustness paths it fires three
 //! times (tension along y with both laws, a uniaxial stress with the cohesive shear),
-//! every time reaching past the target and landing, instead of a lost trace and secant
-//! iterations (118-375 factorizations; 66-90 now).
+//! every time reaching past the target and landing, where a lost trace would fall back
+//! to secant iterations.
 //!
 //! # When a trace stops
 //! Besides the cuts below, a corrector gives up once its iterates cycle: an interface
@@ -88,10 +88,10 @@
 //! arcs under [`CRAWL_FRACTION`] of the first.
 
 use super::contact;
-use super::newton::{comes_back, newton, Mode};
+use super::newton::{comes_back, newton, Mode, CYCLE_WINDOW};
 use super::problem::{dot, Problem, Strain};
 use super::settings::Settings;
-use super::workspace::{TraceBuffers, Workspace};
+use super::workspace::{FactorUse, TraceBuffers, Workspace};
 use crate::interface::TangentKind;
 use crate::state::State;
 
@@ -127,10 +127,8 @@ const CORNER_JUMP: f64 = 4.0;
 const CORNER_LOADING: f64 = 0.1;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;
-/// Iterations back over which a corrector looks for a branch set that comes back.
-const CYCLE_WINDOW: usize = 4;
 /// Corrector iterations spent looking for an arc point with released points.
-const RELEASE_BUDGET: usize = 6;
+const RELEASE_BUDGET: usize = super::newton::RELEASE_BUDGET as usize;
 
 /// Work and progress of one traced path, counted whether or not it lands.
 #[derive(Default)]
@@ -487,7 +485,7 @@ fn direction(points: u32, trace: &TraceBuffers) -> f64 {
 /// fresh factorization; false if `K` is singular.
 fn tangent_at(problem: &Problem, strain: &Strain, trial: &State, ws: &mut Workspace) -> bool {
     problem.evaluate(&trial.unknowns, strain, TangentKind::Consistent, ws);
-    if problem.factorize(ws, false).is_err() {
+    if problem.factorize(ws, FactorUse::OneUse).is_err() {
         return false;
     }
     load_direction(problem, ws);
@@ -668,7 +666,7 @@ impl Tracer<'_, '_> {
     /// constraint).
     fn riks_step(&mut self, dt_pred: f64) -> Option<f64> {
         let (problem, ws) = (self.problem, &mut *self.ws);
-        problem.factorize(ws, false).ok()?;
+        problem.factorize(ws, FactorUse::OneUse).ok()?;
         self.work.iterations += 1;
         // dx_R into ws.dx, dx_f into ws.trace.dxf (both with this factorization).
         ws.dx

@@ -30,12 +30,12 @@ pub use increment::solve_increment;
 #[cfg(any(test, feature = "internals"))]
 pub use increment::Solved;
 #[cfg(any(test, feature = "internals"))]
-pub use linear::NumericFactor;
+pub use linear::{FactorMethod, NumericFactor};
 pub use linear::{FactorKind, LinearSolver};
 pub use problem::Problem;
 #[cfg(any(test, feature = "internals"))]
 pub use problem::Strain;
 pub use settings::{Answer, ContactStatus, IncrementReport, Integration, Settings, TangentRequest};
 #[cfg(any(test, feature = "internals"))]
-pub use workspace::Factorization;
+pub use workspace::{FactorUse, Factorization};
 pub use workspace::Workspace;
