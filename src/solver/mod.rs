@@ -29,13 +29,13 @@ mod workspace;
 pub use increment::solve_increment;
 #[cfg(any(test, feature = "internals"))]
 pub use increment::Solved;
+pub use linear::{FactorKind, LinearSolver};
 #[cfg(any(test, feature = "internals"))]
 pub use linear::{FactorMethod, NumericFactor};
-pub use linear::{FactorKind, LinearSolver};
 pub use problem::Problem;
 #[cfg(any(test, feature = "internals"))]
 pub use problem::Strain;
 pub use settings::{Answer, ContactStatus, IncrementReport, Integration, Settings, TangentRequest};
+pub use workspace::Workspace;
 #[cfg(any(test, feature = "internals"))]
 pub use workspace::{FactorUse, Factorization};
-pub use workspace::Workspace;
