@@ -48,7 +48,7 @@
 //! read from the gaps at each arc point, a sliding point whose gap closed on the way
 //! makes the arc point no equilibrium and the path was lost; held at the trace's start
 //! status with no release, the cycle of the penalty study lands on another post-snap
-//! equilibrium; releasing the closed points as well costs 9 % more factorizations.
+//! equilibrium; releasing the closed points as well costs more factorizations.
 //!
 //! # Corners
 //! The sign of each step keeps the way the path went (`direction`): right at a smooth
@@ -61,9 +61,8 @@
 //! load there (the path goes on dissipating), at least [`CORNER_LOADING`] of those loading
 //! at the arc point: otherwise it is the (nearly) elastic unloading branch of the arc
 //! point, which leads back past the start of the strain history, and the attempt counts
-//! as failed. Measured in `docs/solver.md`: the three paper-law increments
-//! that lost their trace at such a corner and fell back to secant iterations (175-195
-//! factorizations) take 118-137.
+//! as failed. `docs/solver.md` measures what it saves: the paper-law increments that lost
+//! their trace at such a corner fell back to secant iterations.
 //!
 //! If that fails too, the next attempt goes forward again over a long arc,
 //! [`CORNER_JUMP`] times the last one that converged at the arc point. Short arcs end
