@@ -9,8 +9,8 @@
 //! Newton, path following, the predictor and the condensed tangent all work through it,
 //! and none of them through another.
 
-use super::linear::{FactorKind, LinearSolver};
 use super::settings::Settings;
+use super::sparse_direct::{FactorKind, LinearSolver};
 use super::workspace::{Evaluation, FactorUse, Workspace};
 use crate::assembly::Discretization;
 use crate::error::LinearAlgebraError;

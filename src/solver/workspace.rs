@@ -9,7 +9,7 @@ use crate::error::LinearAlgebraError;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMat;
 
-use super::linear::{FactorKind, FactorMethod, LinearSolver, NumericFactor};
+use super::sparse_direct::{FactorKind, FactorMethod, LinearSolver, NumericFactor};
 use crate::assembly::{Discretization, SystemEvaluation};
 use crate::state::State;
 
