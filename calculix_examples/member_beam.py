@@ -4,6 +4,7 @@ stdout (calculix_examples/member_beam_h10.inp and member_beam_h5.inp are this sc
 `--size 10` and `--size 5`, the other options at their defaults).
 
   member_beam.py [--size H] [--down N] [--back N] [--up N] [--umax U] [--stages K,K,K]
+                 [--stage-stress]
 
 A plane-strain beam 400 mm long and 100 mm deep (thickness 1 mm, ccx's default) of CPE4
 elements of H x H mm (H divides 100; default 10, the RVE's size: 400 elements, 3200 RVE
@@ -29,6 +30,8 @@ print the stresses of the two bottom elements at mid-span (element set EMID), wh
 cancels the previous step's SDV request. Splitting the path into steps changes nothing
 else: the prescribed displacement is ramped linearly within each step from where the last
 one ended, and every increment has the same displacement and time increment.
+`--stage-stress` prints every point's stresses at the stages too (*EL PRINT S: the per-point
+comparison of scripts/member_accuracy.py).
 """
 import argparse
 
@@ -85,11 +88,12 @@ def steps(a):
     return out
 
 
-def step(u, n, stage):
+def step(u, n, stage, stress):
     out = ["*STEP, INC=1000", "*STATIC", f"1., {n}., 1e-4, 1.",
            "*BOUNDARY", f"LOAD, 2, 2, {u + 0.0!r}",
            "*NODE PRINT, NSET=LOAD, TOTALS=ONLY", "RF", "*NODE PRINT, NSET=LOAD", "U"]
-    out += ["*EL PRINT, ELSET=EALL", "SDV, COORD"] if stage else ["*EL PRINT, ELSET=EMID", "S"]
+    stage_print = "SDV, COORD, S" if stress else "SDV, COORD"
+    out += ["*EL PRINT, ELSET=EALL", stage_print] if stage else ["*EL PRINT, ELSET=EMID", "S"]
     return out + ["*END STEP"]
 
 
@@ -98,7 +102,7 @@ def header(a, n):
     return [
         f"** member_beam_h{size}.inp -- written by calculix_examples/member_beam.py --size {size}"
         f" --down {a.down} --back {a.back} --up {a.up} --umax {a.umax:g}"
-        f" --stages {','.join(map(str, a.stages))}.",
+        f" --stages {','.join(map(str, a.stages))}{' --stage-stress' if a.stage_stress else ''}.",
         f"** A plain-concrete beam 400 x 100 mm in plane strain, {n} CPE4 elements of {size} x {size} mm",
         f"** ({8 * n} RVE points: ccx's CPE4 has 8, two layers of 4), the paper's ITZ law integrated",
         "** by IMPL-EX (concrete_implex.toml, STATEV mode). Reversed three-point bending: supports",
@@ -119,7 +123,7 @@ def deck(a):
         "*DEPVAR", str(DEPVAR), f"*SOLID SECTION, ELSET=EALL, MATERIAL={MATERIAL}", "1.",
         "*BOUNDARY", "SUPL, 1, 2, 0.", "SUPR, 2, 2, 0."]
     for u, k, stage in steps(a):
-        lines += step(u, k, stage)
+        lines += step(u, k, stage, a.stage_stress)
     return "\n".join(lines) + "\n"
 
 
@@ -131,6 +135,7 @@ def arguments(argv=None):
     p.add_argument("--up", type=int, default=24)
     p.add_argument("--umax", type=float, default=0.12)
     p.add_argument("--stages", type=lambda s: [int(k) for k in s.split(",")], default=None)
+    p.add_argument("--stage-stress", action="store_true")
     a = p.parse_args(argv)
     total = a.down + a.back + a.up
     if a.stages is None:
