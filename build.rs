@@ -7,8 +7,8 @@
 use std::env;
 use std::path::PathBuf;
 
-/// ABI version (soname `librve.so.<ABI_VERSION>`). Keep in step with `rve::ffi::ABI_VERSION`.
-const ABI_VERSION: u32 = 0;
+// `ABI_VERSION`, the soname suffix, declared once for the library and this script.
+include!("src/ffi/abi_version.rs");
 
 fn main() {
     println!("cargo:rerun-if-changed=src");

@@ -110,7 +110,7 @@ fn bench(path: &str) -> Row {
                         &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
-                        true,
+                        rve::solver::FactorMethod::SymmetricFirst,
                         MemStack::new(&mut stack),
                     )
                     .expect("factorization");
@@ -142,7 +142,7 @@ fn bench(path: &str) -> Row {
                         &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
-                        false,
+                        rve::solver::FactorMethod::Lu,
                         MemStack::new(&mut stack),
                     )
                     .expect("lu");

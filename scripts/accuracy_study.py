@@ -12,154 +12,19 @@ machine may be shared. Stresses are checked to be identical across repeats.
 """
 
 import argparse
-import csv
-import json
-import math
 import os
 import re
 import shutil
-import statistics
-import subprocess
 import sys
 import tempfile
 import time
 
 import study_provenance
+from studykit import COLOURS, ROOT, Runner, ms, svg_plot, write_scene
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 COARSE = os.path.join(ROOT, "scenes", "paper_rve.toml")
 FINE = os.path.join(ROOT, "scenes", "paper_rve_fine.toml")
 EPS_END = 2.2e-4  # the section 5.2.1 path, eps = [2.2e-4, 0, 0]
-
-
-# ---------------------------------------------------------------- scene editing
-
-def set_key(text, section, key, value):
-    """Set `key = value` inside `[section]` (or the first `[[section]]`) of a TOML text.
-
-    Replaces the key's line if present, else inserts it right after the header. Only the
-    flat `key = value` lines the shipped scenes use are handled."""
-    lines = text.split("\n")
-    start = None
-    for i, line in enumerate(lines):
-        s = line.strip()
-        if s in ("[%s]" % section, "[[%s]]" % section):
-            start = i
-            break
-    if start is None:
-        lines += ["", "[%s]" % section, "%s = %s" % (key, value)]
-        return "\n".join(lines)
-    end = len(lines)
-    for j in range(start + 1, len(lines)):
-        if lines[j].strip().startswith("["):
-            end = j
-            break
-    pat = re.compile(r"^\s*%s\s*=" % re.escape(key))
-    for j in range(start + 1, end):
-        if pat.match(lines[j]):
-            lines[j] = "%s = %s" % (key, value)
-            return "\n".join(lines)
-    lines.insert(start + 1, "%s = %s" % (key, value))
-    return "\n".join(lines)
-
-
-def absolutize_files(text, scene_dir):
-    """Scene files name meshes relative to the scene's directory (`geometry.file`); a copy
-    written elsewhere must name them absolutely."""
-    def repl(m):
-        path = m.group(2)
-        if not os.path.isabs(path):
-            path = os.path.normpath(os.path.join(scene_dir, path))
-        return '%sfile = "%s"' % (m.group(1), path)
-    return re.sub(r'^(\s*)file\s*=\s*"([^"]*)"', repl, text, flags=re.M)
-
-
-def toml_value(v):
-    if isinstance(v, str):
-        return '"%s"' % v
-    if isinstance(v, float):
-        return repr(v)
-    return str(v)
-
-
-def make_scene(base, edits, path):
-    with open(base) as f:
-        text = f.read()
-    text = absolutize_files(text, os.path.dirname(base))
-    for (section, key), value in edits.items():
-        text = set_key(text, section, key, toml_value(value))
-    with open(path, "w") as f:
-        f.write(text)
-    return path
-
-
-# ---------------------------------------------------------------- running
-
-class Runner:
-    def __init__(self, rve, tmp, repeats, budget):
-        self.rve, self.tmp, self.repeats, self.budget = rve, tmp, repeats, budget
-        self.count = 0
-        self.wall = 0.0
-        # Increments of the first run of every variant, and those the fast path answered.
-        self.increments = 0
-        self.fast = 0
-
-    def mesh_stats(self, scene):
-        out = subprocess.run([self.rve, "mesh", scene, "--json"], capture_output=True,
-                             text=True, check=True).stdout
-        return json.loads(out)
-
-    def run(self, name, base, edits):
-        """Run a variant REPEATS times; return a dict with the rows and median timings.
-
-        A run that fails (the solver gives up at some increment) is not repeated; its
-        response.csv holds the increments before the failure, which are kept (`failed`
-        holds the error message)."""
-        scene = make_scene(base, edits, os.path.join(self.tmp, name + ".toml"))
-        totals, medians, rows, failed = [], [], None, None
-        spent = 0.0
-        for r in range(self.repeats):
-            if r > 0 and spent > self.budget:
-                break  # expensive variant: fewer repeats keep the study within minutes
-            out = os.path.join(self.tmp, "%s.%d" % (name, r))
-            t0 = time.perf_counter()
-            p = subprocess.run([self.rve, "run", scene, "--out", out, "--quiet"],
-                               capture_output=True, text=True)
-            self.wall += time.perf_counter() - t0
-            spent += time.perf_counter() - t0
-            self.count += 1
-            rr = []
-            if os.path.exists(os.path.join(out, "response.csv")):
-                with open(os.path.join(out, "response.csv")) as f:
-                    rr = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-            shutil.rmtree(out, ignore_errors=True)
-            if p.returncode != 0:
-                msg = (p.stderr.strip().splitlines() or ["exit %d" % p.returncode])[-1]
-                m = re.search(r"relative residual ([0-9.eE+-]+)", msg)
-                failed = "solver gave up after increment %d (eps_xx = %.4g)%s" % (
-                    len(rr), rr[-1]["eps_xx"] if rr else 0.0,
-                    ", residual %s" % m.group(1) if m else ": " + msg)
-                print("note: %s: %s" % (name, msg), file=sys.stderr)
-            secs = [row["seconds"] for row in rr] or [0.0]
-            totals.append(sum(secs))
-            medians.append(statistics.median(secs))
-            if rows is None:
-                rows = rr
-                self.increments += len(rr)
-                self.fast += int(sum(row.get("fast", 0.0) for row in rr))
-            elif any(a["sig_xx"] != b["sig_xx"] or a["iterations"] != b["iterations"]
-                     for a, b in zip(rows, rr)):
-                print("warning: %s is not reproducible across repeats" % name, file=sys.stderr)
-            if failed:
-                break
-        return {
-            "name": name, "scene": scene, "rows": rows, "failed": failed,
-            "runs": len(totals), "total": statistics.median(totals), "total_min": min(totals),
-            "total_max": max(totals), "per_inc": statistics.median(medians),
-            "iterations": int(sum(r["iterations"] for r in rows)),
-            "max_iterations": int(max([r["iterations"] for r in rows] or [0])),
-            "max_substeps": int(max([r["substeps"] for r in rows] or [0])),
-        }
 
 
 # ---------------------------------------------------------------- measures
@@ -176,13 +41,10 @@ def at_strain(rows, eps):
     raise KeyError(eps)
 
 
-def ms(x):
-    if 1e3 * x < 0.1:
-        return "%.2g" % (1e3 * x)
-    return "%.1f" % (1e3 * x) if x < 10 else "%.0f" % (1e3 * x)
-
-
-def pct(x, digits=2):
+def percent_cell(x, digits=2):
+    """A number already in percent (100 * a relative error) as a table cell: `digits`
+    decimals, "%.1e" below 10^-digits, "0 (ref.)" for the reference itself, "—" for none.
+    (studykit.pct takes a fraction instead.)"""
     if x is None:
         return "—"
     if x == 0:
@@ -207,85 +69,6 @@ def notes(vs, md):
             md.append("- `%s`: %s. Its row uses the increments done." % (v["name"], v["failed"]))
 
 
-# ---------------------------------------------------------------- SVG
-
-def svg_plot(path, title, xlabel, ylabel, series, logx=False, logy=False, w=640, h=420,
-             legend=160):
-    """series: list of (label, colour, [(x, y, point_label)], draw_line[, marker radius,
-    default 3, 0 for none])."""
-    ml, mr, mt, mb = 70, legend, 40, 50
-    pw, ph = w - ml - mr, h - mt - mb
-    xs = [p[0] for s in series for p in s[2]]
-    ys = [p[1] for s in series for p in s[2]]
-    fx = (lambda v: math.log10(v)) if logx else (lambda v: v)
-    fy = (lambda v: math.log10(v)) if logy else (lambda v: v)
-
-    def span(vals, f, log):
-        lo, hi = min(f(v) for v in vals), max(f(v) for v in vals)
-        if log:
-            return math.floor(lo), math.ceil(hi) if math.ceil(hi) > math.floor(lo) else math.floor(lo) + 1
-        pad = 0.05 * (hi - lo or 1.0)
-        return (0.0 if lo >= 0 and lo < 0.3 * hi else lo - pad), hi + pad
-
-    x0, x1 = span(xs, fx, logx)
-    y0, y1 = span(ys, fy, logy)
-    X = lambda v: ml + (fx(v) - x0) / (x1 - x0) * pw
-    Y = lambda v: mt + ph - (fy(v) - y0) / (y1 - y0) * ph
-    o = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" '
-         'font-family="sans-serif" font-size="12">' % (w, h),
-         '<rect width="100%" height="100%" fill="white"/>',
-         '<text x="%d" y="22" font-size="14">%s</text>' % (ml, title),
-         '<rect x="%d" y="%d" width="%d" height="%d" fill="none" stroke="#333"/>' % (ml, mt, pw, ph)]
-
-    def ticks(a, b, log):
-        if log:
-            return [10.0 ** k for k in range(int(a), int(b) + 1)]
-        step = 10 ** math.floor(math.log10((b - a) / 5))
-        for m in (1, 2, 5, 10):
-            if (b - a) / (m * step) <= 6:
-                step *= m
-                break
-        t = math.ceil(a / step) * step
-        out = []
-        while t <= b + 1e-12:
-            out.append(t)
-            t += step
-        return out
-
-    for t in ticks(x0, x1, logx):
-        x = X(t)
-        o.append('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#ddd"/>' % (x, mt, x, mt + ph))
-        o.append('<text x="%.1f" y="%d" text-anchor="middle">%s</text>' % (x, mt + ph + 16, "%g" % t))
-    for t in ticks(y0, y1, logy):
-        y = Y(t)
-        o.append('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#ddd"/>' % (ml, y, ml + pw, y))
-        o.append('<text x="%d" y="%.1f" text-anchor="end">%s</text>' % (ml - 6, y + 4, "%g" % t))
-    o.append('<text x="%d" y="%d" text-anchor="middle">%s</text>' % (ml + pw / 2, h - 10, xlabel))
-    o.append('<text transform="translate(16,%d) rotate(-90)" text-anchor="middle">%s</text>'
-             % (mt + ph / 2, ylabel))
-    for k, (label, colour, pts, line, *radius) in enumerate(series):
-        if line and len(pts) > 1:
-            o.append('<polyline fill="none" stroke="%s" stroke-width="1.5" points="%s"/>'
-                     % (colour, " ".join("%.1f,%.1f" % (X(p[0]), Y(p[1])) for p in pts)))
-        for p in pts:
-            if (radius or [3])[0]:
-                o.append('<circle cx="%.1f" cy="%.1f" r="%g" fill="%s"/>'
-                         % (X(p[0]), Y(p[1]), (radius or [3])[0], colour))
-            if p[2]:
-                o.append('<text x="%.1f" y="%.1f" font-size="10">%s</text>'
-                         % (X(p[0]) + 5, Y(p[1]) - 5, p[2]))
-        ly = mt + 14 + 18 * k
-        o.append('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" stroke-width="2"/>'
-                 % (ml + pw + 10, ly - 4, ml + pw + 30, ly - 4, colour))
-        o.append('<text x="%d" y="%d">%s</text>' % (ml + pw + 34, ly, label))
-    o.append("</svg>")
-    with open(path, "w") as f:
-        f.write("\n".join(o) + "\n")
-
-
-COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf", "#7f7f7f"]
-
-
 # ---------------------------------------------------------------- studies
 
 def mesh_study(R, md):
@@ -295,8 +78,8 @@ def mesh_study(R, md):
     REF = 5  # index of the fine scene's mesh, the reference
     vs = []
     for s, si in sizes:
-        v = R.run("mesh_%g" % s, FINE, {("mesh", "size"): s, ("mesh", "interface_size"): si})
-        st = R.mesh_stats(make_scene(FINE, {("mesh", "size"): s, ("mesh", "interface_size"): si},
+        v = R.run("mesh_%g" % s, FINE, {"mesh.size": s, "mesh.interface_size": si})
+        st = R.mesh_stats(write_scene(FINE, {"mesh.size": s, "mesh.interface_size": si},
                                      os.path.join(R.tmp, "m.toml")))
         v.update(size=s, isize=si, tri=st["triangles"], itz=st["interface_elements"])
         vs.append(v)
@@ -329,8 +112,8 @@ def mesh_study(R, md):
         md.append("| %g / %g%s | %d / %d | %s | %s | %d | %s | %s | %.3f (%d) | %s |" % (
             v["size"], v["isize"], " (ref.)" if v is ref else "", v["tri"], v["itz"],
             time_cells(v), ms(v["per_inc"]), v["iterations"],
-            pct(100 * e if v is not ref else 0), pct(100 * ed if v is not ref else 0),
-            spv, jp + 1, pct(100 * v["peakerr"] if v is not ref else 0)))
+            percent_cell(100 * e if v is not ref else 0), percent_cell(100 * ed if v is not ref else 0),
+            spv, jp + 1, percent_cell(100 * v["peakerr"] if v is not ref else 0)))
     notes(vs, md)
     return vs, ref
 
@@ -347,8 +130,8 @@ def quadrature_study(R, md):
     md.append("|---|---|---|---|---|---|---|---|---|---|")
     out = {}
     for mesh, base in (("coarse", COARSE), ("fine", FINE)):
-        g = R.run("quad_g3_" + mesh, base, {("mesh", "interface_quadrature"): "gauss3"})
-        l = R.run("quad_l2_" + mesh, base, {("mesh", "interface_quadrature"): "lobatto2"})
+        g = R.run("quad_g3_" + mesh, base, {"mesh.interface_quadrature": "gauss3"})
+        l = R.run("quad_l2_" + mesh, base, {"mesh.interface_quadrature": "lobatto2"})
         ip, sp, _ = peak(g["rows"])
         for v in (g, l):
             r = v["rows"]
@@ -363,9 +146,9 @@ def quadrature_study(R, md):
             md.append("| %s | %s | %s | %s | %d | %.3f (%d) | %s | %s | %s | %s |" % (
                 mesh, "gauss3 (ref.)" if v is g else "lobatto2", time_cells(v),
                 ms(v["per_inc"]), v["iterations"], spv, jp + 1,
-                pct(100 * (spv - sp) / sp) if v is l else "0 (ref.)",
-                pct(100 * pre) if v is l else "0 (ref.)", pct(100 * dd, 3) if v is l else "0 (ref.)",
-                pct(100 * allm) if v is l else "0 (ref.)"))
+                percent_cell(100 * (spv - sp) / sp) if v is l else "0 (ref.)",
+                percent_cell(100 * pre) if v is l else "0 (ref.)", percent_cell(100 * dd, 3) if v is l else "0 (ref.)",
+                percent_cell(100 * allm) if v is l else "0 (ref.)"))
         out[mesh] = (g, l)
         notes((g, l), md)
     return out
@@ -390,7 +173,7 @@ def tolerance_study(R, md):
     out = {}
     keys = ["D%d%d" % (i, j) for i in (1, 2, 3) for j in (1, 2, 3)]
     for mesh, base in (("coarse", COARSE), ("fine", FINE)):
-        vs = [R.run("tol_%g_%s" % (t, mesh), base, {("solver", "tolerance"): t}) for t in tols]
+        vs = [R.run("tol_%g_%s" % (t, mesh), base, {"solver.tolerance": t}) for t in tols]
         for t, v in zip(tols, vs):
             v["tol"] = t
         ref = vs[-1]
@@ -408,8 +191,8 @@ def tolerance_study(R, md):
             md.append("| %s | %g%s | %s | %s | %d | %d (%d) | %s | %s | %s |" % (
                 mesh, t, " (ref.)" if v is ref else "", time_cells(v), ms(v["per_inc"]),
                 v["iterations"], v["max_iterations"], v["max_substeps"],
-                pct(100 * es, 4) if v is not ref else "0 (ref.)",
-                pct(100 * et, 4) if v is not ref else "0 (ref.)",
+                percent_cell(100 * es, 4) if v is not ref else "0 (ref.)",
+                percent_cell(100 * et, 4) if v is not ref else "0 (ref.)",
                 ", ".join("%.3f" % r["sig_xx"] for r in v["rows"][18:20]) + (" †" if v["failed"] else "")))
         out[mesh] = vs
         notes(vs, md)
@@ -436,7 +219,7 @@ def increments_study(R, md):
     common = [EPS_END * k / 5 for k in range(1, 6)]
     out = {}
     for mesh, base in (("coarse", COARSE), ("fine", FINE)):
-        vs = [R.run("inc_%d_%s" % (n, mesh), base, {("path", "increments"): n}) for n in ns]
+        vs = [R.run("inc_%d_%s" % (n, mesh), base, {"path.0.increments": n}) for n in ns]
         ref = vs[-1]
         ip, sp, ep = peak(ref["rows"])
         done = [v for v in vs if not v["failed"]]
@@ -458,8 +241,8 @@ def increments_study(R, md):
             md.append("| %s | %d%s | %s | %s | %d | %d (%.3g) | %d | %s | %s | %.3f (%.3g) | %s |" % (
                 mesh, n, (" (ref.)" if v is ref else "") + (" †" if v["failed"] else ""), time_cells(v), ms(v["per_inc"]),
                 v["iterations"], r[km]["iterations"], r[km]["eps_xx"], v["max_substeps"],
-                pct(100 * pre) if v is not ref else "0 (ref.)",
-                "0 (ref.)" if v is eref else ("failed" if end is None else pct(100 * end)),
+                percent_cell(100 * pre) if v is not ref else "0 (ref.)",
+                "0 (ref.)" if v is eref else ("failed" if end is None else percent_cell(100 * end)),
                 spv, epv, "%+.2f" % (100 * v["peakerr"]) if v is not ref else "0 (ref.)"))
         out[mesh] = vs
         notes(vs, md)
@@ -479,7 +262,7 @@ def boundary_study(R, md):
     md.append("|---|---|---|---|---|---|---|---|---|---|")
     out = {}
     for mesh, base in (("coarse", COARSE), ("fine", FINE)):
-        vs = {k: R.run("bc_%s_%s" % (k, mesh), base, {("boundary", "kind"): k}) for k in kinds}
+        vs = {k: R.run("bc_%s_%s" % (k, mesh), base, {"boundary.kind": k}) for k in kinds}
         per = vs["periodic"]
         for k in kinds:
             v = vs[k]
@@ -541,7 +324,7 @@ def plots(out, sections):
     series = [("mesh.size (20 inc.)", COLOURS[0],
                [(v["total"], 100 * v["err"], "%d tri" % v["tri"]) for v in mesh_vs
                 if "err" in v and v is not mesh_ref and v["err"] > 0], True)]
-    for k, mesh in enumerate(("coarse", "fine")):
+    for k, mesh in enumerate("coarse.fine"):
         series.append(("increments, %s" % mesh, COLOURS[1 + k],
                        [(v["total"], 100 * v["err"], "n=%d" % v["n"]) for v in inc[mesh][:-1]
                         if "err" in v and v["err"] > 0], True))

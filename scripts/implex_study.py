@@ -15,6 +15,7 @@ of response.csv summed over the path (median over repeats, as in accuracy_study.
 """
 
 import argparse
+import copy
 import json
 import math
 import os
@@ -26,9 +27,9 @@ import tempfile
 import time
 import tomllib
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_study import COLOURS, ROOT, Runner, absolutize_files, ms, svg_plot  # noqa: E402
-import study_provenance  # noqa: E402
+import study_provenance
+import studykit
+from studykit import COLOURS, ROOT, Runner, ms, svg_plot
 
 LEVELS = (1, 2, 4, 8)  # IMPL-EX at m N increments
 IMPLICIT_LEVELS = (1, 2, 4, 8, 16)  # the last one is the reference
@@ -45,45 +46,31 @@ GENERATOR = os.path.join(ROOT, "target", "implex-study", "hard-case-scenes")
 # ---------------------------------------------------------------- paths
 
 class StrainPath:
-    """A scene without its `[[path]]` and the path's segments `(to, increments)`."""
+    """A scene (a dictionary) without its `[[path]]` and the path's segments
+    `(to, increments)`."""
 
-    def __init__(self, name, family, text, segments, note=""):
-        self.name, self.family, self.text, self.segments = name, family, text, segments
+    def __init__(self, name, family, scene, segments, note=""):
+        scene.pop("path", None)
+        self.name, self.family, self.body, self.segments = name, family, scene, segments
         self.note = note
         self.n = sum(n for _, n in segments)
 
     def scene(self, m, integration, step_tolerance=None):
         """The scene text with every segment cut m times finer."""
-        text = re.sub(r"(?m)^\s*integration\s*=.*\n", "", self.text)
-        if "[solver]" not in text:
-            text += "\n[solver]\n"
-        text = text.replace("[solver]", '[solver]\nintegration = "%s"' % integration, 1)
+        scene = copy.deepcopy(self.body)
+        solver = scene.setdefault("solver", {})
+        solver["integration"] = integration
         if step_tolerance is not None:
-            text = text.replace("[solver]", "[solver]\nstep_tolerance = %g" % step_tolerance, 1)
-        for to, n in self.segments:
-            text += "\n[[path]]\nto = [%s]\nincrements = %d\n" % (
-                ", ".join(repr(float(v)) for v in to), n * m)
-        return text
-
-
-def strip_paths(text):
-    """The scene text without its `[[path]]` tables (each runs to the next header)."""
-    out, skipping = [], False
-    for line in text.split("\n"):
-        s = line.strip()
-        if s.startswith("["):
-            skipping = s == "[[path]]"
-        if not skipping:
-            out.append(line)
-    return "\n".join(out).rstrip() + "\n"
+            solver["step_tolerance"] = float("%g" % step_tolerance)
+        scene["path"] = [{"to": [float(v) for v in to], "increments": n * m}
+                         for to, n in self.segments]
+        return studykit.dump_scene(scene)
 
 
 def shipped(file, name, family):
-    with open(file) as f:
-        text = f.read()
-    segs = [(p["to"], p["increments"]) for p in tomllib.loads(text)["path"]]
-    body = absolutize_files(strip_paths(text), os.path.dirname(file))
-    return StrainPath(name, family, body, segs, os.path.relpath(file, ROOT))
+    scene = studykit.load_scene(file)
+    segs = [(p["to"], p["increments"]) for p in scene["path"]]
+    return StrainPath(name, family, scene, segs, os.path.relpath(file, ROOT))
 
 
 GENERATOR_MAIN = """#[path = "%s"]
@@ -147,7 +134,7 @@ def hard_cases(seeds):
         c = json.loads(line)
         segs = segments_of(c["targets"])
         assert sum(n for _, n in segs) == len(c["targets"])
-        paths.append(StrainPath("hard case %d" % c["seed"], "hard cases", c["scene"], segs,
+        paths.append(StrainPath("hard case %d" % c["seed"], "hard cases", tomllib.loads(c["scene"]), segs,
                                 "%s; %s" % (c["kind"], c["setup"])))
     return paths
 

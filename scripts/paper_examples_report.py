@@ -4,20 +4,29 @@ Usage: python3 scripts/paper_examples_report.py WORK OUT.md SVG_DIR
 
 WORK holds one directory per run (response.csv of `rve run`, status: "ok" or the error)
 and provenance.json, the study's start as scripts/study_provenance.py records it.
-Standard library only; the plots are plain SVG. The verdicts use the same measures and
-thresholds as tests/paper_examples.rs, which asserts them.
+Standard library only; the plots are plain SVG. The verdicts use the same measures as
+tests/paper_examples.rs, which asserts them, and the same thresholds, read from
+tests/data/paper_verdicts.toml (the one place both read).
 """
 
 import csv
 import math
 import os
+import statistics
 import sys
 
+import tomllib
+
 import study_provenance
+from studykit import ROOT, pct
 
 WORK, MD, SVG_DIR = sys.argv[1:4]
 SVG_REL = os.path.relpath(SVG_DIR, os.path.dirname(MD))
 FIG10 = 4.8
+with open(os.path.join(ROOT, "tests", "data", "paper_verdicts.toml"), "rb") as _f:
+    LIMIT = tomllib.load(_f)
+# Fig. 10's peak over random samples (scripts/fig10_ensemble.py), if it has been run.
+ENSEMBLE = os.path.join(ROOT, "docs", "paper_examples", "fig10_ensemble.csv")
 
 
 # ----------------------------------------------------------------------------- data
@@ -68,10 +77,6 @@ def limit_point(name, comp):
 
 def rel(a, b):
     return abs(a - b) / abs(b)
-
-
-def pct(x, digits=2):
-    return f"{100 * x:.{digits}g} %"
 
 
 def more_less(x, more="higher", less="lower"):
@@ -199,11 +204,15 @@ def curve(label, r, xkey, ykey, dashed=False):
 
 
 # ============================================================================ findings
-FINDINGS = []  # (where, claim, ours, verdict)
+FINDINGS = []  # (where, claim, ours, verdict, score, the paper's finding)
 
 
-def finding(where, claim, ours, verdict):
-    FINDINGS.append((where, claim, ours, verdict))
+def finding(where, claim, ours, verdict, score=None, paper=True):
+    """One verdict. `score` ("yes", "partly", "no"; by default the verdict itself) is what
+    the summary counts; `paper=False` marks a row that is not a finding of the paper."""
+    score = score or verdict
+    assert score in ("yes", "partly", "no"), score
+    FINDINGS.append((where, claim, ours, verdict, score, paper))
     w(f"**Finding.** Paper: {claim} Ours: {ours} **Agreement: {verdict}.**", "")
 
 
@@ -252,7 +261,9 @@ def fig7(d11):
     s40, s04, t04 = ratios["40.0"][0], ratios["0.4"][0], ratios["0.4"][1]
     # The intact interface (initial stiffness e sigma_c / delta_c) in series with the cell.
     series = 1.0 / (1.0 + d11 / (math.e * 40.0 / 2e-4 * 2.0))
-    ok = s40 > 0.95 and s04 < 0.25 and t04 < 0.3 and s40 > ratios["4.0"][0] > s04
+    lim = LIMIT["fig7"]
+    ok = (s40 > lim["elastic_secant_above"] and s04 < lim["fractured_secant_below"]
+          and t04 < lim["fractured_first_tangent_below"] and s40 > ratios["4.0"][0] > s04)
     finding(
         "5.1, Fig. 7",
         "sigma_c = 40 behaves like an elastic RVE, sigma_c = 0.4 like a strongly fractured "
@@ -268,19 +279,21 @@ def fig6(d11, d12, g):
     """Fig. 6: the three load cases."""
     w("### Fig. 6: load cases 1-3 (sigma_c = 4)", "")
     w(
-        "Damage measure: the secant along the path, `s . eps / (eps . D_el . eps)` at the "
-        "end (1 = elastic; plane strain D_el).",
+        "The paper's Fig. 6 plots sigma_x against eps_x, and the verdict reads that. A second "
+        "measure, the secant along the path, `s . eps / (eps . D_el . eps)` at the end "
+        "(1 = elastic; plane strain D_el), tells damage from elastic coupling.",
         "",
     )
     cases = [("case 1", "si_sc4.0", [8e-5, 0, 0]), ("case 2", "si_case2", [8e-5, -8e-5, 0]),
              ("case 3", "si_case3", [8e-5, -8e-5, 5e-4])]
-    rows, sec = [], []
+    rows, sec, sx = [], [], []
     for name, rn, eps in cases:
         last = run(rn)[20]
         s = [last["sig_xx"], last["sig_yy"], last["sig_xy"]]
         num = sum(a * b for a, b in zip(s, eps))
         den = d11 * (eps[0] ** 2 + eps[1] ** 2) + 2 * d12 * eps[0] * eps[1] + g * eps[2] ** 2
         sec.append(num / den)
+        sx.append(s[0])
         rows.append([name, str(eps), f"[{s[0]:.4f}, {s[1]:.4f}, {s[2]:.4f}]", f"{num / den:.3f}"])
     table(["case", "eps (20 increments)", "stress at the end", "secant ratio"], rows)
     plot(
@@ -293,11 +306,14 @@ def fig6(d11, d12, g):
     finding(
         "5.1, Fig. 6",
         "the RVE is more damaged when the loading conditions are increased (cases 1 to 3).",
-        f"secant ratios {sec[0]:.2f}, {sec[1]:.2f}, {sec[2]:.2f}: case 3 (shear) is by far "
-        "the most damaged, but case 2 is LESS damaged than case 1 (eps_yy < 0 lowers the "
-        "normal traction on the vertical ITZ through D12; the test finds the same order "
-        "with the largest opening delta_max).",
-        "partly" if sec[2] < 0.5 * min(sec[:2]) and sec[1] > sec[0] else "check",
+        f"sigma_x at the end {sx[0]:.2f}, {sx[1]:.2f}, {sx[2]:.2f} N/mm²: lower from case 1 "
+        "to case 3, as the paper plots it. The secant ratios "
+        f"({sec[0]:.2f}, {sec[1]:.2f}, {sec[2]:.2f}) show that case 3 (shear) is by far the "
+        "most damaged, while case 2's lower sigma_x is elastic coupling, not damage "
+        "(eps_yy < 0 lowers the normal traction on the vertical ITZ through D12; by the "
+        "secant and by the largest opening delta_max case 2 is less damaged than case 1).",
+        "yes (on sigma_x, the paper's measure)" if sx[0] > sx[1] > sx[2] else "no",
+        "yes" if sx[0] > sx[1] > sx[2] else "no",
     )
 
 
@@ -318,6 +334,8 @@ def fig8(d11):
     )
     closed = [k for k in range(1, len(r) + 1) if r[k]["contact_points"] > 0]
     pen = 1.0 / (1.0 / d11 + 1.0 / (1e7 * 0.2 * 2.0))
+    ok = (closed and all(r[k]["contact_points"] > 0 for k in range(closed[0], len(r) + 1))
+          and rel(r[40]["D11"], pen) < LIMIT["fig8"]["compression_d11_rel"])
     finding(
         "5.1, Fig. 8",
         "the element closes and the unilateral effect is captured; the cohesive-contact "
@@ -326,9 +344,12 @@ def fig8(d11):
         f"{r[40]['D11']:.0f} (the cell with the penalty lambda_p l_e in series: {pen:.0f}). "
         f"The paper's law makes the shear stress jump at closure (s_xy "
         f"{r[closed[0] - 1]['sig_xy']:.2f} to {r[closed[0]]['sig_xy']:.2f}): sliding is "
-        "penalised from the reference configuration.",
-        "yes" if closed and all(r[k]["contact_points"] > 0 for k in range(closed[0], len(r) + 1))
-        and rel(r[40]["D11"], pen) < 1e-3 else "no",
+        "penalised from the reference configuration. This is a self-consistency check: it "
+        "shows that the element closes and that the closed cell has the stiffness our own "
+        "penalty law gives; the paper's statement is qualitative and gives no number to "
+        "compare with.",
+        "yes (a self-consistency check)" if ok else "no",
+        "yes" if ok else "no",
     )
 
 
@@ -380,17 +401,28 @@ def fig10(el, x, px, ex, py_):
         "ellipses (other sample)": limit_point("lp_ellipses_sample", "sig_xx")[0],
     }
     top = max(others.values())
-    finding(
-        "5.2.1, Fig. 10",
-        "a close-up of the ITZ cracks is taken at sigma_x = 4.8 N/mm² (so the paper's RVE "
-        "reaches at least that stress).",
-        f"the limit point is {px:.3f} N/mm² at eps_xx = {ex:.3e} ({pct(1 - px / FIG10)} below "
-        f"4.8); the largest stress of the 20-increment path is {max(x.col('sig_xx')):.3f}. "
-        f"No variant reaches 4.8 (largest: {top:.3f}, "
-        + ", ".join(f"{k} {v:.3f}" for k, v in others.items())
-        + "). Same order, not the same value: the paper's RVE is another random sample and mesh.",
-        "no (order of magnitude yes)" if px < FIG10 else "yes",
-    )
+    ours = (f"the limit point is {px:.3f} N/mm² at eps_xx = {ex:.3e} ({pct(1 - px / FIG10)} below "
+            f"4.8); the largest stress of the 20-increment path is {max(x.col('sig_xx')):.3f}. "
+            f"No variant of this sample reaches 4.8 (largest: {top:.3f}, "
+            + ", ".join(f"{k} {v:.3f}" for k, v in others.items()) + ").")
+    spread = ensemble_spread()
+    if spread is None:
+        finding("5.2.1, Fig. 10", FIG10_CLAIM, ours + " (No ensemble: run scripts/fig10_ensemble.py.)",
+                "no" if px < FIG10 else "yes")
+        return
+    reach = sum(v["reach"] for v in spread.values())
+    total = sum(v["n"] for v in spread.values())
+    ours += (" Over random samples of the same specification (seeds, scripts/fig10_ensemble.py): "
+             + "; ".join(f"{k} {v['n']} samples, {v['lo']:.2f}-{v['hi']:.2f} (median "
+                         f"{v['median']:.2f}), {v['reach']} reach 4.8"
+                         for k, v in spread.items())
+             + ". The paper's RVE is one sample; its 4.8 is to be read against that spread.")
+    score = "yes" if reach >= 0.05 * total else "partly" if reach > 0 else "no"
+    verdict = {"yes": f"yes (4.8 within the spread of samples: {reach} of {total} reach it)",
+               "partly": f"partly (4.8 in the tail of the spread: {reach} of {total} reach it)",
+               "no": f"no (no sample of {total} reaches 4.8)"}[score]
+    finding("5.2.1, Fig. 10", FIG10_CLAIM, ours, verdict, score)
+    ensemble_table(spread)
     w(
         f"The nonlinearity before the peak (the secant is "
         f"{pct(1 - x[18]['sig_xx'] / x[18]['eps_xx'] / el['D11'])} below the virgin stiffness "
@@ -402,6 +434,39 @@ def fig10(el, x, px, ex, py_):
         "points unload (table above): the crack has localised.",
         "",
     )
+
+
+FIG10_CLAIM = ("a close-up of the ITZ cracks is taken at sigma_x = 4.8 N/mm² (so the paper's "
+               "RVE reaches at least that stress).")
+
+
+def ensemble_spread():
+    """Per variant of scripts/fig10_ensemble.py: samples, spread, how many reach 4.8."""
+    if not os.path.exists(ENSEMBLE):
+        return None
+    with open(ENSEMBLE) as f:
+        rows = [r for r in csv.DictReader(f) if r["peak"]]
+    out = {}
+    for variant in dict.fromkeys(r["variant"] for r in rows):
+        peaks = sorted(float(r["peak"]) for r in rows if r["variant"] == variant)
+        out[variant] = {"n": len(peaks), "lo": peaks[0], "hi": peaks[-1],
+                        "median": statistics.median(peaks), "mean": statistics.fmean(peaks),
+                        "sd": statistics.pstdev(peaks),
+                        "reach": sum(1 for p in peaks if p >= FIG10),
+                        "seeds": f"{min(int(r['seed']) for r in rows)}-{max(int(r['seed']) for r in rows)}"}
+    return out
+
+
+def ensemble_table(spread):
+    w("Limit points of random samples of the paper's RVE (`scenes/paper_rve.toml` with "
+      "`geometry.seed` varied; `plane_strain`: `cell.analysis = \"plane_strain\"`: section 5 "
+      "opens with \"a plane deformation condition is assumed in all analysis\", section 5.2 "
+      "says plane stress; `zero_margin`: "
+      "`geometry.margin = 0`). Made by `scripts/fig10_ensemble.py`, which also records the "
+      "command, the commit and the CPU time in `docs/paper_examples/fig10_ensemble.md`.", "")
+    table(["variant", "seeds", "samples", "min", "median", "mean", "sd", "max", "reach 4.8"],
+          [[k, v["seeds"], v["n"], f"{v['lo']:.3f}", f"{v['median']:.3f}", f"{v['mean']:.3f}",
+            f"{v['sd']:.3f}", f"{v['hi']:.3f}", v["reach"]] for k, v in spread.items()])
 
 
 def newton_iterations(x):
@@ -430,18 +495,22 @@ def newton_iterations(x):
     table(["path", "increments", "with <= 4 iterations", "snap-back (limit points) at increment",
            "slower than 4 without a snap-back", "most iterations", "most substeps",
            "answered by the fast path (0 iterations)"], rows)
+    ok = most <= LIMIT["newton"]["most_iterations"]
     finding(
-        "5.2.2 (end)",
-        "up to four Newton iterations per increment, quadratic convergence.",
+        "5.2.2 (end); 5.2.1",
+        "up to four Newton iterations per increment, quadratic convergence (5.2.2, end); "
+        "\"mainly at the peak ... when there are many cracks at the ITZ, the iterative process "
+        "presents a increasing of iterations\" (5.2.1).",
         f"at most {most:.0f} iterations on every increment of the Fig. 10 and cycle paths but "
-        "the one in which the RVE snaps back, which the path following certifies by the limit "
-        "points of the strain along the traced path (`limit_points` column); quadratic order "
-        "on every correction that changes no ITZ branch (`tests/newton_convergence.rs`). The "
-        "snap-back increment takes tens of iterations: its equilibrium lies on another branch "
-        "(table). The other paths have increments after the peak that are slower than 4 "
-        "without a certified snap-back: Newton, sub-steps or path following reach the "
-        "post-peak branch there, and no traced path shows a turn of the strain.",
-        "yes, but for the snap-back increment" if most <= 4 else "no",
+        "the one in which the RVE snaps back at the peak, which the path following certifies "
+        "by the limit points of the strain along the traced path (`limit_points` column); "
+        "quadratic order on every correction that changes no ITZ branch "
+        "(`tests/newton_convergence.rs`). The snap-back increment takes tens of iterations: "
+        "the increase at the peak the paper reports (table). The other paths have increments "
+        "after the peak that are slower than 4 without a certified snap-back: Newton, "
+        "sub-steps or path following reach the post-peak branch there.",
+        "yes (more iterations only at the peak, as the paper says)" if ok else "no",
+        "yes" if ok else "no",
     )
 
 
@@ -475,7 +544,10 @@ def fig11(el, x, y, px, ex, py_, ey):
         f"{half:.1e} up to eps = 1.1e-4; the limit points differ by {pct(atp)} "
         f"({px:.3f} vs {py_:.3f}) and the stresses at 2.2e-4 by "
         f"{pct(rel(y[20]['sig_yy'], x[20]['sig_xx']))}.",
-        "yes" if atp > 0.01 and atp > 10 * max(half, rel(el["D22"], el["D11"])) else "no",
+        "yes" if (atp > LIMIT["fig11"]["peak_rel_above"]
+                  and atp > LIMIT["fig11"]["peak_over_early"] * max(half, rel(el["D22"], el["D11"]))
+                  and max(half, rel(el["D22"], el["D11"])) < LIMIT["fig11"]["early_rel_below"])
+        else "no",
     )
 
 
@@ -483,8 +555,12 @@ def fig13(el, x, px, ex):
     """Fig. 13: mesh objectivity, coarse against fine."""
     w("### Fig. 13: mesh objectivity, 532 vs 8176 triangles (96 vs 362 ITZ elements)", "")
     w(
-        "The paper's fine mesh has 8088 triangles and 364 ITZ elements and uses linear BC; "
-        "here both BCs, `scenes/paper_rve_fine.toml` and `scenes/paper/rve_fine_linear.toml`.",
+        "The paper's fine mesh has 8088 triangles and 364 ITZ elements and uses linear BC, "
+        "so the verdict is decided with linear BC (`scenes/paper/rve_fine_linear.toml`); "
+        "periodic BC (`scenes/paper_rve_fine.toml`) is shown too. After the peak the meshes "
+        "are compared by their limit points, not increment by increment: across a snap-back "
+        "an increment lands on whichever branch its end strain reaches, so one increment of "
+        "two meshes can sit on different branches (periodic, increment 19).",
         "",
     )
     fine, xl, fl = run("fine"), run("x_linear"), run("fine_linear")
@@ -512,17 +588,20 @@ def fig13(el, x, px, ex):
     )
     pre_p = max(rel(fine[k]["sig_xx"], x[k]["sig_xx"]) for k in range(1, 19))
     pre_l = max(rel(fl[k]["sig_xx"], xl[k]["sig_xx"]) for k in range(1, 19))
-    post_p = max(rel(fine[k]["sig_xx"], x[k]["sig_xx"]) for k in (19, 20))
     post_l = max(rel(fl[k]["sig_xx"], xl[k]["sig_xx"]) for k in (19, 20))
+    lim = LIMIT["fig13"]
+    ok = (pre_l < lim["before_peak_rel"] and pre_p < lim["before_peak_rel"]
+          and rel(lpfl[0], lpxl[0]) < lim["limit_point_rel"])
     finding(
         "5.2.1, Fig. 13",
-        "the responses of the coarse and the fine mesh do not change.",
-        f"up to increment 18 (98 % of the peak) they agree within {pct(pre_p)} (periodic) "
-        f"and {pct(pre_l)} (linear); the fine mesh's limit point is {pct(rel(lpf[0], px))} "
-        f"lower; after the peak they differ by up to {pct(post_p)} (periodic: the coarse "
-        f"mesh snaps at 2.09e-4, the fine one later) and {pct(post_l)} (linear).",
-        "before the peak yes; after it no" if pre_p < 5e-3 and pre_l < 5e-3 and post_p > 0.1
-        else "check: the measures changed",
+        "the responses of the coarse and the fine mesh (linear BC) do not change.",
+        f"with linear BC, up to increment 18 (98 % of the peak) they agree within "
+        f"{pct(pre_l)} and the fine mesh's limit point is {pct(rel(lpfl[0], lpxl[0]))} lower "
+        f"({lpfl[0]:.3f} against {lpxl[0]:.3f}); both snap in increment 19, and on the "
+        f"post-snap branch (increments 19-20) they differ by {pct(post_l)}. With periodic BC: "
+        f"{pct(pre_p)} up to increment 18, limit points {pct(rel(lpf[0], px))} apart.",
+        "yes (linear BC, as the paper; up to and at the peak)" if ok else "no",
+        "yes" if ok else "no",
     )
 
 
@@ -560,6 +639,9 @@ def fig15(el, px, ex):
     )
     deficit = sum(1 - s[k]["sig_xx"] / c[k]["sig_xx"] for k in range(14, 21)) / 7
     tr = lambda d: d["D11"] + d["D22"]  # noqa: E731
+    lim = LIMIT["fig15"]
+    ok = (tr(els) < tr(el) and tr(elr) < tr(el) and deficit > lim["same_centres_post_peak_deficit"]
+          and els["D11"] > el["D11"] and lpr[0] > px)
     finding(
         "5.2.1, Fig. 15",
         "the response is more flexible with elliptic than with circular aggregates.",
@@ -571,9 +653,9 @@ def fig15(el, px, ex):
         f"on average. The other sample is "
         f"{more_less(elr['D11'] / el['D11'] - 1, 'stiffer', 'softer')} in D11 and lower before "
         f"the peak, yet its limit point is {more_less(lpr[0] / px - 1)}.",
-        "partly (after the peak; on average in the elastic range)"
-        if tr(els) < tr(el) and tr(elr) < tr(el) and deficit > 0.05 and els["D11"] > el["D11"]
-        and lpr[0] > px else "check: the measures changed",
+        "partly (after the peak; on average in the elastic range)" if ok
+        else "check: the measures changed",
+        "partly" if ok else "no",
     )
 
 
@@ -612,30 +694,42 @@ def section_5_2_2():
         f"({unload / el['D11']:.2f} of it); from increment 34 every ITZ point is closed and "
         f"D11 = {comp:.0f} ({comp / el['D11']:.3f} of the virgin value) on a linear "
         "compression branch (one iteration per increment).",
-        "yes" if unload < 0.7 * el["D11"] and rel(comp, el["D11"]) < 0.02 and all_closed else "no",
+        "yes" if (unload < LIMIT["fig16"]["unloading_secant_below"] * el["D11"]
+                  and rel(comp, el["D11"]) < LIMIT["fig16"]["recovered_rel"] and all_closed) else "no",
     )
     x, xl = run("x"), run("x_linear")
-    gap = [(xl[k]["sig_xx"] - x[k]["sig_xx"]) / x[k]["sig_xx"] for k in range(1, 21)]
+    path_stiffer = all(xl[k]["sig_xx"] > x[k]["sig_xx"] for k in range(1, 21))
     elastic = (run("el_linear")[1]["D11"] - el["D11"]) / el["D11"]
-    exceptions = [k for k in range(1, 61)
-                  if cl[k]["sig_xx"] * math.copysign(1, cl[k]["eps_xx"])
-                  <= cp[k]["sig_xx"] * math.copysign(1, cp[k]["eps_xx"])]
-    w("Linear minus periodic on the section 5.2.1 path, relative to periodic:", "")
-    table(["increment"] + [str(k) for k in (1, 5, 10, 15, 18, 19, 20)],
-          [["s_xx gap"] + [f"{gap[k - 1]:.1e}" for k in (1, 5, 10, 15, 18, 19, 20)]])
+    # Linear minus periodic along the cycle, relative to periodic, positive where linear is
+    # the stiffer (in tension and in compression), as tests/paper_examples.rs measures it.
+    gap = [(cl[k]["sig_xx"] - cp[k]["sig_xx"]) * math.copysign(1, cp[k]["eps_xx"])
+           / abs(cp[k]["sig_xx"]) for k in range(1, 61)]
+    exceptions = [k for k in range(1, 61) if gap[k - 1] <= 0]
+    shown = (1, 5, 10, 17, 18, 19, 20, 30, 40, 60)
+    w("Linear minus periodic on the cycle (the path on which the paper states it), relative "
+      "to periodic, positive where linear is the stiffer:", "")
+    table(["increment"] + [str(k) for k in shown], [["s_xx gap"] + [f"{gap[k - 1]:.1e}" for k in shown]])
     pl, pp = limit_point("lp_x_linear", "sig_xx"), limit_point("lp_x", "sig_xx")
+    lim = LIMIT["linear_bc"]
+    trend = (gap[0] < lim["first_gap_below"] and gap[16] > lim["growth"] * gap[0]
+             and min(gap[18], gap[19]) > lim["post_peak_gap"])
+    holds = trend and elastic > 0 and pl[0] > pp[0]
     finding(
-        "5.2.2",
+        "5.2.2, Fig. 16",
         "periodic and linear BC give very similar responses at first and differ when "
         "dissipation takes place; linear BC is the stiffest.",
-        f"linear is stiffer from the virgin tangent ({elastic:.1e}) through every increment "
-        f"of the 5.2.1 path (gap {gap[0]:.1e} at the first increment, {gap[17]:.1e} at "
-        f"increment 18, {pct(gap[18])} after the peak) and of the cycle except increment "
+        f"on the cycle the gap is {gap[0]:.1e} at the first increment, {gap[16]:.1e} at "
+        f"increment 17 and {pct(gap[18])} after the snap; linear is stiffer from the virgin "
+        f"tangent ({elastic:.1e}) through every increment of the cycle but "
         + ", ".join(str(k) for k in exceptions)
         + f": there (eps_xx = {cp[18]['eps_xx']:.3e}) linear is already past its limit point "
-        f"({pl[1]:.4e}) and periodic not yet ({pp[1]:.4e}). The limit-point stresses differ "
-        f"by {pct(rel(pl[0], pp[0]))}.",
-        "yes" if all(g > 0 for g in gap) and elastic > 0 else "no",
+        f"({pl[1]:.4e}) and periodic not yet ({pp[1]:.4e}), so periodic carries "
+        f"{pct(cp[18]['sig_xx'] / cl[18]['sig_xx'] - 1)} more. The limit-point stresses differ "
+        f"by {pct(rel(pl[0], pp[0]))} (linear the higher). On the section 5.2.1 path linear is "
+        f"stiffer at {'every' if path_stiffer else 'not every'} increment.",
+        (f"partly (linear stiffer at {60 - len(exceptions)} of 60 increments)" if exceptions
+         else "yes") if holds else "no",
+        ("partly" if exceptions else "yes") if holds else "no",
     )
     fig17(el)
 
@@ -656,7 +750,9 @@ def distances(runs):
 
 
 def converged(d):
-    return d is not None and d["1e7"] < 0.01 and d["1e8"] < 1e-3 and d["1e4"] > 0.2
+    lim = LIMIT["fig17"]
+    return (d is not None and d["1e7"] < lim["converged"] and d["1e8"] < lim["cohesive_1e8"]
+            and d["1e4"] > lim["off_1e4"] and d["1e5"] > lim["off_1e5"])
 
 
 def fig17(el):
@@ -706,8 +802,10 @@ def paper_law_finding(el, pap, dist_p):
                     for lp in lps[:5]}
         end_p = {lp: abs(pap[lp][60]["sig_xx"] - ref_p[60]["sig_xx"]) / abs(ref_p[60]["sig_xx"])
                  for lp in lps[:5]}
-        paper_ok = (dist_p["1e7"] < 0.01 and dist_p["1e8"] < 0.01 and dist_p["1e4"] > 0.2
-                    and end_p["1e8"] < 1e-3)
+        lim = LIMIT["fig17"]
+        paper_ok = (dist_p["1e7"] < lim["converged"] and dist_p["1e8"] < lim["converged"]
+                    and dist_p["1e4"] > lim["off_1e4"] and dist_p["1e5"] > lim["off_1e5"]
+                    and end_p["1e7"] < lim["end_1e7"] and end_p["1e8"] < lim["end_1e8"])
 
     failing = [lp for lp in lps if not pap[lp].ok]
     finding(
@@ -739,10 +837,11 @@ def paper_law_finding(el, pap, dist_p):
 def cohesive_finding(el, coh, dist):
     """The finding of Fig. 17 with contact_shear = "cohesive"."""
     lps = PENALTIES
-    conv = converged(dist) and all(dist[lps[k + 1]] < dist[lps[k]] / 3 for k in range(4))
+    conv = converged(dist) and all(dist[lps[k + 1]] < dist[lps[k]] / LIMIT["fig17"]["decay_per_decade"]
+                                   for k in range(4))
     finding(
-        "5.2.2, Fig. 17 (contact_shear = \"cohesive\")",
-        "the same.",
+        "5.2.2, Fig. 17 (contact_shear = \"cohesive\", the project's own law)",
+        "the same (not a finding of the paper: the paper has one contact law).",
         f"distance to 1e9: {', '.join(f'{lp} {dist[lp]:.1e}' for lp in lps[:5])}: converged "
         "from 1e7 up (first order in 1 / lambda_p); the closure increment takes "
         f"{coh['1e5'][34]['iterations']:.0f} iterations at 1e5 and "
@@ -750,6 +849,7 @@ def cohesive_finding(el, coh, dist):
         f"({coh['1e9'][60]['D11']:.0f}) is {pct(coh['1e9'][60]['D11'] / el['D11'] - 1)} above the "
         "virgin one: a closed ITZ is stiffer than the intact intrinsic cohesive law.",
         "yes" if conv else "no",
+        paper=False,
     )
 
 
@@ -792,10 +892,20 @@ def main():
         "",
         "## Summary",
         "",
+    ]
+    paper = [f for f in FINDINGS if f[5]]
+    count = {s: sum(1 for f in paper if f[4] == s) for s in ("yes", "partly", "no")}
+    head += [
+        f"Of the paper's {len(paper)} findings, {count['yes']} agree, {count['partly']} agree "
+        f"in part and {count['no']} do not. A finding agrees when the paper's statement holds "
+        "on the measure and the path the paper uses, with no exception its own text does not "
+        "admit; the thresholds are in `tests/data/paper_verdicts.toml`. The last row is the "
+        "project's own contact law, not a finding of the paper, and is not counted.",
+        "",
         "| where | the paper | ours | agrees |",
         "|---|---|---|---|",
     ]
-    for where, claim, ours, verdict in FINDINGS:
+    for where, claim, ours, verdict, _, _ in FINDINGS:
         head.append(f"| {where} | {claim} | {ours} | **{verdict}** |")
     head.append("")
     with open(MD, "w") as f:

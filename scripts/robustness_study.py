@@ -31,56 +31,43 @@ the largest stress and tangent entry of the per-iteration run.
 Standard library only.
 """
 
-import csv
 import os
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
 import study_provenance
+import studykit
 
 RVE, MD = sys.argv[1:3]
 KEEP = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--keep" else None
 NS = [16, 20, 24, 28, 32, 36, 40, 44, 48, 56, 64]
 FINE_NS = [20, 40]
 CYCLE_FACTORS = [0.5, 0.75, 1.0, 1.5, 2.0]
-# contact law -> (addition to the ITZ table, lines added to [solver])
+# contact law -> scene keys it sets
 LAWS = {
-    "paper": ("", ""),
-    "paper, per iteration": ("", 'contact_status = "per_iteration"\n'),
-    "cohesive": (', contact_shear = "cohesive"', ""),
+    "paper": {},
+    "paper, per iteration": {"solver.contact_status": "per_iteration"},
+    "cohesive": {"materials.itz.contact_shear": "cohesive"},
 }
-PENALTY = "penalty = { lambda_p = 1e5 }"
 STRESS = ["sig_xx", "sig_yy", "sig_xy"]
 TANGENT = [f"D{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)]
 
 
-def scene_text(src, law, path):
-    text = open(src).read()
-    if text.count(PENALTY) != 1 or text.count("[solver]") != 1:
-        sys.exit(f"{src}: `{PENALTY}` and `[solver]` must occur once")
-    itz, solver = LAWS[law]
-    text = text.replace(PENALTY, PENALTY + itz).replace("[solver]", "[solver]\n" + solver)
-    return text[: text.index("[[path]]")] + path
-
-
 def line_path(to, n):
-    return f"[[path]]\nto = [{to[0]:e}, {to[1]:e}, {to[2]:e}]\nincrements = {n}\n"
+    # The targets as written with 7 significant digits (the sample's definition).
+    return studykit.line_path([float(f"{v:e}") for v in to], n)
 
 
 def cycle_path(factor):
     # paper_rve_cycle.toml: to 2.3e-4 in 20, then to -4.5e-4 in 40.
     a, b = round(20 * factor), round(40 * factor)
-    return (
-        f"[[path]]\nto = [2.3e-4, 0.0, 0.0]\nincrements = {a}\n\n"
-        f"[[path]]\nto = [-4.5e-4, 0.0, 0.0]\nincrements = {b}\n"
-    )
+    return [{"to": [2.3e-4, 0.0, 0.0], "increments": a}, {"to": [-4.5e-4, 0.0, 0.0], "increments": b}]
 
 
 def sample():
-    """(group, label, source scene, law, path text, increments) of every run."""
+    """(group, label, source scene, law, path (`[[path]]` tables), increments) of every run."""
     t = 2.6e-4
     groups = [
         ("tension circles x", "scenes/paper_rve.toml", (t, 0.0, 0.0), NS),
@@ -104,11 +91,9 @@ def sample():
 
 
 class Result:
-    def __init__(self, out_dir, ok, status, wall, total):
-        with open(os.path.join(out_dir, "response.csv")) as f:
-            self.rows = list(csv.DictReader(f))
-        rows = self.rows
-        self.ok, self.status, self.wall, self.total = ok, status, wall, total
+    def __init__(self, run, total):
+        self.rows = rows = run.rows
+        self.ok, self.status, self.wall, self.total = run.ok, run.status, run.wall, total
         self.done = len(rows)
         its = [int(r["iterations"]) for r in rows]
         self.iterations = sum(its)
@@ -133,19 +118,11 @@ def run_all(work):
     results = []
     for k, (group, label, src, law, path, n) in enumerate(sample()):
         name = f"run{k:03d}"
-        scene = os.path.join(work, name + ".toml")
-        with open(scene, "w") as f:
-            f.write(scene_text(src, law, path))
-        out = os.path.join(work, name)
-        start = time.perf_counter()
-        proc = subprocess.run([RVE, "run", scene, "--out", out, "--quiet"], capture_output=True, text=True)
-        wall = time.perf_counter() - start
-        lines = [l for l in proc.stderr.splitlines() if l.strip()]
-        status = "ok" if proc.returncode == 0 else (lines[-1] if lines else f"exit {proc.returncode}")
-        res = Result(out, proc.returncode == 0, status, wall, n)
+        scene = studykit.write_scene(src, dict(LAWS[law], path=path), os.path.join(work, name + ".toml"))
+        res = Result(studykit.run_rve(scene, os.path.join(work, name), rve=RVE), n)
         results.append((group, label, law, res))
         verdict = "ok" if res.ok else f"fails at increment {res.done + 1}"
-        print(f"{group:30} {label:16} {law:22} {wall:6.2f} s  {verdict}", flush=True)
+        print(f"{group:30} {label:16} {law:22} {res.wall:6.2f} s  {verdict}", flush=True)
     return results
 
 

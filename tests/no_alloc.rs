@@ -115,7 +115,12 @@ fn checked_indefinite_factorizations_do_not_allocate() {
         let run = |ws: &mut rve::Workspace, rhs: &mut [f64]| {
             let factorization = ws.factorization();
             let kind = factorization
-                .factorize(model.linear_solver(), &pattern.symbolic, &values, false)
+                .factorize(
+                    model.linear_solver(),
+                    &pattern.symbolic,
+                    &values,
+                    rve::solver::FactorUse::OneUse,
+                )
                 .unwrap();
             factorization.solve(model.linear_solver(), rhs, 1);
             kind

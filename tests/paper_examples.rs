@@ -123,6 +123,23 @@ fn run(rel: &str, replacements: &[(&str, &str)]) -> Vec<Point> {
     curve.points
 }
 
+/// A threshold of `tests/data/paper_verdicts.toml` ("fig7.elastic_secant_above"): the one
+/// place that `scripts/paper_examples_report.py` reads too, so the document's verdicts and
+/// these assertions cannot drift apart.
+fn limit(key: &str) -> f64 {
+    static T: OnceLock<toml::Table> = OnceLock::new();
+    let table = T.get_or_init(|| {
+        let path = common::repo("tests/data/paper_verdicts.toml");
+        std::fs::read_to_string(&path).unwrap().parse().unwrap()
+    });
+    let (section, name) = key.split_once('.').unwrap();
+    table
+        .get(section)
+        .and_then(|s| s.get(name))
+        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .unwrap_or_else(|| panic!("paper_verdicts.toml has no number `{key}`"))
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
@@ -206,7 +223,8 @@ fn peak_x_linear() -> Peak {
 /// - Fig. 7: with sigma_c = 40 "the behavior of the RVE seems like an elastic RVE", with
 ///   sigma_c = 0.4 it is "a medium with a strong fracture without a transition process".
 /// - Fig. 6: "the behavior more damaged of the RVE when the loading conditions are
-///   increased" (case 3 adds the shear 5e-4 to case 2).
+///   increased" (case 3 adds the shear 5e-4 to case 2), read on what Fig. 6 plots,
+///   sigma_x against eps_x: the curve is lower from case 1 to case 2 to case 3.
 #[test]
 fn section_5_1_sigma_c_and_loading_cases() {
     const SCENE: &str = "scenes/single_interface.toml";
@@ -237,40 +255,57 @@ fn section_5_1_sigma_c_and_loading_cases() {
     let [(s4, _), (s40, _), (s04, t04)] = [secant[0], secant[1], secant[2]];
     // Elastic-like: the intact interface (initial stiffness e sigma_c / delta_c =
     // 5.4e5 N/mm³ for sigma_c = 40) in series with the 2 mm cell gives
-    // 1 / (1 + D11 / (5.4e5 * 2)) = 0.970 D11 before any softening; 0.95 leaves 2 % for
-    // the curvature of the envelope at 8e-5.
-    assert!(s40 > 0.95, "sigma_c = 40 is not elastic-like: {s40}");
+    // 1 / (1 + D11 / (5.4e5 * 2)) = 0.970 D11 before any softening.
+    assert!(
+        s40 > limit("fig7.elastic_secant_above"),
+        "sigma_c = 40 is not elastic-like: {s40}"
+    );
     // Strong fracture: at sigma_c = 0.4 the interface is past its peak at the end of the
     // path and the secant has lost most of the stiffness; already the first increment
     // (eps = 4e-6) is far from elastic (no transition).
-    assert!(s04 < 0.25 && t04 < 0.3, "sigma_c = 0.4: {s04}, {t04}");
+    assert!(
+        s04 < limit("fig7.fractured_secant_below")
+            && t04 < limit("fig7.fractured_first_tangent_below"),
+        "sigma_c = 0.4: {s04}, {t04}"
+    );
     assert!(s40 > s4 && s4 > s04);
 
-    // Loading cases with sigma_c = 4: largest opening reached (delta_max / delta_c).
+    // Loading cases with sigma_c = 4: s_xx at the end and the largest opening reached
+    // (delta_max / delta_c).
     let m = model(SCENE, &[]);
-    let mut opening = Vec::new();
+    let (mut sigma_x, mut opening) = (Vec::new(), Vec::new());
     for (name, to) in cases {
         let mut inst = Instance::new(m.clone());
         let mut ws = m.workspace();
+        let mut stress = [0.0; 3];
         for eps in along(to) {
-            inst.update(eps, &mut ws, TangentRequest::None).unwrap();
+            stress = inst
+                .update(eps, &mut ws, TangentRequest::None)
+                .unwrap()
+                .stress;
             inst.commit().unwrap();
         }
+        sigma_x.push(stress[0]);
         let d = inst
             .committed()
             .history
             .iter()
             .fold(0.0f64, |a, &delta_max| a.max(delta_max))
             / DELTA_C;
-        println!("{name}: delta_max = {d:.3} delta_c");
+        println!("{name}: s_xx {:.4}, delta_max = {d:.3} delta_c", stress[0]);
         opening.push(d);
     }
+    // The paper's measure: sigma_x at the end falls from case 1 to case 3.
+    assert!(
+        sigma_x[0] > sigma_x[1] && sigma_x[1] > sigma_x[2],
+        "{sigma_x:?}"
+    );
     // Case 3 (with shear) opens the interface far more than cases 1 and 2.
     assert!(opening[2] > 2.0 * opening[0] && opening[2] > 2.0 * opening[1]);
-    // Not the paper's wording: case 2 opens the interface LESS than case 1. The ITZ is
-    // vertical (normal x); eps_yy = -8e-5 lowers s_xx by D12 * 8e-5 and so the normal
-    // traction, so case 2 is the less damaged one here. (The paper's single element sits
-    // in the middle of a small mesh; its Fig. 6 does not separate cases 1 and 2.)
+    // But sigma_x is not a damage measure: case 2 opens the interface LESS than case 1.
+    // The ITZ is vertical (normal x); eps_yy = -8e-5 lowers s_xx by D12 * 8e-5 and so
+    // the normal traction, so case 2's lower sigma_x is the Poisson coupling, and by its
+    // opening case 2 is the less damaged one.
     assert!(opening[1] < opening[0]);
 }
 
@@ -282,10 +317,12 @@ fn section_5_1_sigma_c_and_loading_cases() {
 /// non-linearity of the response is linked to the increase of the number of cracks in the
 /// ITZ".
 ///
-/// Discrepancy: our RVE never reaches 4.8 N/mm². Its limit point under eps_xx is 4.53
-/// N/mm² (5.6 % below); no variant here reaches 4.8 (eps_yy 4.63, linear BC 4.54, fine
-/// mesh 4.47, ellipses 4.50 and 4.68: docs/paper_examples.md). The paper's RVE is another
-/// random sample and mesh, so its peak is of the same order, not the same.
+/// Our RVE (seed 7) does not reach 4.8 N/mm²: its limit point under eps_xx is 4.53 N/mm²
+/// (5.6 % below), and no variant of it reaches 4.8. The paper's RVE is another random
+/// sample, so the question is where 4.8 falls among samples of the same specification:
+/// `scripts/fig10_ensemble.py` runs this limit-point path on many seeds (and the
+/// plane-strain and zero-margin variants), and docs/paper_examples.md scores the finding
+/// on that spread. This test asserts seed 7's side of it.
 #[test]
 fn fig_10_peak_is_of_the_order_of_4_8() {
     let peak = peak_x_periodic();
@@ -298,10 +335,10 @@ fn fig_10_peak_is_of_the_order_of_4_8() {
         peak.stress < FIG_10_SIGMA_X,
         "the peak reaches 4.8: update the docs"
     );
-    // Same order: within 10 %. (The spread of the limit points over the variants of this
-    // RVE is 4.47-4.68, i.e. +-2.5 %; the paper's sample is a different one.)
+    // Same order. (Where 4.8 falls among random samples of this RVE's specification:
+    // scripts/fig10_ensemble.py, docs/paper_examples.md.)
     assert!(
-        peak.stress > 0.9 * FIG_10_SIGMA_X,
+        peak.stress > limit("fig10.same_order_fraction") * FIG_10_SIGMA_X,
         "peak {:.3}",
         peak.stress
     );
@@ -328,7 +365,7 @@ fn fig_10_peak_is_of_the_order_of_4_8() {
             secant,
             p.cracked
         );
-        if k <= top && p.stress[0] < 0.9 * peak.stress {
+        if k <= top && p.stress[0] < limit("fig10.uncracked_below_peak_fraction") * peak.stress {
             assert_eq!(p.cracked, 0, "increment {}", k + 1);
         }
         if p.cracked > 0 && first_crack.is_none() {
@@ -348,12 +385,15 @@ fn fig_10_peak_is_of_the_order_of_4_8() {
 }
 
 /// Section 5.2.2 (end): "the problems have presented up to four iterations to obtain an
-/// accurate response even dealing with contact problems".
+/// accurate response even dealing with contact problems", and section 5.2.1: "mainly at
+/// the peak of the sigma x epsilon curve when there are many cracks at the ITZ, the
+/// iterative process presents a increasing of iterations".
 ///
-/// True away from the peak (`tests/newton_convergence.rs` asserts it, with the quadratic
-/// rate, on the 5.2.1 and 5.2.2 paths). Not across the snap after the peak: there the
-/// strain-controlled increment jumps to the post-peak branch, and the solver needs path
-/// following and sub-steps (101 iterations in 20 sub-steps on the paper's path).
+/// In agreement with both: at most four iterations on every increment up to the peak
+/// (`tests/newton_convergence.rs` asserts it, with the quadratic rate, on the 5.2.1 and
+/// 5.2.2 paths), and more at the peak: the increment across the snap after it jumps to
+/// the post-peak branch and needs path following and sub-steps (tens of iterations;
+/// docs/paper_examples.md has the count).
 #[test]
 fn newton_iterations_across_the_snap() {
     let p = run("scenes/paper_rve.toml", &[]);
@@ -362,11 +402,12 @@ fn newton_iterations_across_the_snap() {
     let top = (0..p.len())
         .max_by(|&a, &b| p[a].stress[0].total_cmp(&p[b].stress[0]))
         .unwrap();
-    assert!(iterations[..=top].iter().all(|&i| i <= 4));
+    let most = limit("newton.most_iterations") as u32;
+    assert!(iterations[..=top].iter().all(|&i| i <= most));
     // The increment after the largest stress crosses the snap (the stress falls by a
     // quarter) and takes more than four iterations.
     assert!(p[top + 1].stress[0] < 0.75 * p[top].stress[0]);
-    assert!(iterations[top + 1] > 4, "{iterations:?}");
+    assert!(iterations[top + 1] > most, "{iterations:?}");
 }
 
 /// Fig. 11: loading along x and along y "the difference between the responses arises at
@@ -397,25 +438,36 @@ fn anisotropy_appears_only_near_the_peak() {
     );
     // Nearly isotropic at first: the four aggregates give D11 and D22 within 1e-4, and
     // the curves agree to 5e-4 over the first half of the path.
-    assert!(elastic < 1e-3, "elastic anisotropy {elastic:.1e}");
-    assert!(first_half < 1e-3, "{first_half:.1e}");
+    let early = limit("fig11.early_rel_below");
+    assert!(elastic < early, "elastic anisotropy {elastic:.1e}");
+    assert!(first_half < early, "{first_half:.1e}");
     // At the peak the two directions differ by 2 %, more than ten times the early
     // difference (40 times measured), and after it by several % (6 % measured).
-    assert!(at_peak > 0.01, "peaks differ by {at_peak:.1e}");
-    assert!(at_peak > 10.0 * first_half.max(elastic));
-    assert!(post > 0.02, "post-peak differ by {post:.1e}");
+    assert!(
+        at_peak > limit("fig11.peak_rel_above"),
+        "peaks differ by {at_peak:.1e}"
+    );
+    assert!(at_peak > limit("fig11.peak_over_early") * first_half.max(elastic));
+    assert!(
+        post > limit("fig11.post_peak_rel_above"),
+        "post-peak differ by {post:.1e}"
+    );
 }
 
 /// Fig. 13: "the numerical responses did not change" from the coarse (Fig. 9) to the fine
-/// mesh (8088 triangles, 364 ITZ elements in the paper; 8176 / 362 here), with linear
-/// BC in the paper. Checked for both BCs on the paper's 20-increment path.
+/// mesh (8088 triangles, 364 ITZ elements in the paper; 8176 / 362 here), "a linear
+/// condition has been imposed on the boundary": decided with linear BC, as the paper ran
+/// it; periodic BC is checked before the peak too.
 ///
-/// Agreement up to the peak; not after it: with periodic BC the two meshes snap on
-/// different increments (the fine mesh at 2.2e-4, the coarse at 2.09e-4), so their
-/// post-peak stresses differ by 25-39 %; with linear BC both snap at 2.09e-4 and differ
-/// by 5 %. The limit points (docs/paper_examples.md) differ by 1.5 %.
+/// In agreement: up to increment 18 (98 % of the peak) the curves agree to half a
+/// percent, and the limit points to 2 %. After the peak the meshes are compared by their
+/// limit points, not increment by increment: across a snap-back an increment lands on
+/// whichever branch its end strain reaches first, so the stresses of one increment can
+/// sit on different branches (with periodic BC the coarse mesh has snapped at increment
+/// 19 and the fine one not yet).
 #[test]
-fn mesh_objectivity_before_the_peak() {
+fn mesh_objectivity_with_linear_bc() {
+    let before = limit("fig13.before_peak_rel");
     for (bc, coarse, fine) in [
         (
             "periodic",
@@ -429,25 +481,27 @@ fn mesh_objectivity_before_the_peak() {
         ),
     ] {
         let (c, f) = (run(coarse, &[]), run(fine, &[]));
-        let diffs: Vec<f64> = c
+        let pre = c
             .iter()
             .zip(&f)
+            .take(18)
             .map(|(a, b)| rel(b.stress[0], a.stress[0]))
-            .collect();
-        let pre = diffs[..18].iter().cloned().fold(0.0, f64::max);
-        let post = diffs[18..].iter().cloned().fold(0.0, f64::max);
-        println!("{bc}: coarse vs fine, increments 1-18: {pre:.2e}, 19-20: {post:.2e}");
-        // Up to 1.98e-4 (increment 18 of 20, 98 % of the peak stress) the curves agree to
-        // 0.5 %: 0.02 N/mm² on the paper's 0-5 N/mm² plot, under a line width. (Measured:
-        // 0.07 % at the first increment, the mesh error of the elastic tangent, growing
-        // to 0.4 % at increment 18.)
-        assert!(pre < 5e-3, "{bc}: {pre:.2e}");
-        // After the peak: see the doc comment. Asserted so that the doc stays true.
-        match bc {
-            "periodic" => assert!(post > 0.1, "{bc}: {post:.2e}"),
-            _ => assert!(post < 0.1, "{bc}: {post:.2e}"),
-        }
+            .fold(0.0, f64::max);
+        println!("{bc}: coarse vs fine, increments 1-18: {pre:.2e}");
+        // 0.5 %: 0.02 N/mm² on the paper's 0-5 N/mm² plot, under a line width (the mesh
+        // error of the elastic tangent at the first increment, growing towards the peak).
+        assert!(pre < before, "{bc}: {pre:.2e}");
     }
+    let fine = limit_point(
+        &model("scenes/paper/rve_fine_linear.toml", &[]),
+        X,
+        "x linear, fine mesh",
+    );
+    let coarse = peak_x_linear();
+    assert!(
+        rel(fine.stress, coarse.stress) < limit("fig13.limit_point_rel"),
+        "{coarse:?} {fine:?}"
+    );
 }
 
 /// Fig. 15: "the homogenized response seems more flexible for ellipsoid shape than for
@@ -520,7 +574,7 @@ fn ellipses_against_circles() {
     // 0.5 % of the circles (as for the meshes above), the sample below the circles.
     for k in 0..13 {
         assert!(
-            rel(s[k].stress[0], c[k].stress[0]) < 5e-3,
+            rel(s[k].stress[0], c[k].stress[0]) < limit("fig15.same_centres_before_peak_rel"),
             "increment {}",
             k + 1
         );
@@ -538,12 +592,18 @@ fn ellipses_against_circles() {
         deficit += (1.0 - s[k].stress[0] / c[k].stress[0]) / 7.0;
     }
     println!("post-peak mean deficit of the same-centre ellipses {deficit:.3}");
-    assert!(deficit > 0.05, "{deficit}");
+    assert!(
+        deficit > limit("fig15.same_centres_post_peak_deficit"),
+        "{deficit}"
+    );
     // Limit points: same-centre ellipses 0.6 % below the circles; the sample ABOVE them.
     let pc = peak_x_periodic();
     let ps = limit_point(&same, X, "same-centre ellipses");
     let pr = limit_point(&sample, X, "ellipse sample");
-    assert!(ps.stress < pc.stress && rel(ps.stress, pc.stress) < 0.02);
+    assert!(
+        ps.stress < pc.stress
+            && rel(ps.stress, pc.stress) < limit("fig15.same_centres_limit_point_rel")
+    );
     assert!(
         pr.stress > pc.stress,
         "the sample's peak is not higher any more"
@@ -585,13 +645,13 @@ fn unilateral_effect_on_the_cycle() {
         recovered / virgin
     );
     // Damage: the unloading secant has lost 41 % of the virgin stiffness.
-    assert!(unload < 0.7 * virgin);
+    assert!(unload < limit("fig16.unloading_secant_below") * virgin);
     // Recovery: closed cracks give back the virgin stiffness within 2 % (+0.2 %
     // measured). The penalty lambda_p l_e = 1e5 * 0.48 = 4.8e4 N/mm³ is close to the
     // intact ITZ's initial stiffness (e sigma_c / delta_c = 5.4e4 normal, half that in
     // shear), so the closed RVE is nearly the virgin one; see the penalty study for
     // larger lambda_p.
-    assert!(rel(recovered, virgin) < 0.02);
+    assert!(rel(recovered, virgin) < limit("fig16.recovered_rel"));
     // No dissipation in compression: the branch is linear (constant tangent, stress
     // increments equal to tangent times strain increments).
     for w in comp.windows(2) {
@@ -601,14 +661,17 @@ fn unilateral_effect_on_the_cycle() {
     }
 }
 
-/// Section 5.2.2: "initially, the numerical responses are very similar, but when the
-/// dissipation processes take place ... a difference between the periodic and linear
-/// conditions is more evident. The linear condition gives the stiffest solution."
+/// Section 5.2.2, on the cycle of Fig. 16: "initially, the numerical responses are very
+/// similar, but when the dissipation processes take place ... a difference between the
+/// periodic and linear conditions is more evident. The linear condition gives the
+/// stiffest solution."
 ///
-/// In agreement on the paper's path and on the cycle, with one exception on the cycle:
-/// at its increment 18 (eps_xx = 2.07e-4) the linear RVE is already past its limit point
-/// (2.0625e-4) and the periodic one not yet (2.076e-4), so there the periodic stress is
-/// 35 % higher. The limit-point stresses themselves differ by less than 0.1 %.
+/// Partly in agreement, on the cycle where the paper states it: similar at first, the gap
+/// growing with dissipation, and linear stiffer at every increment but one. At increment
+/// 18 (eps_xx = 2.07e-4) the linear RVE is already past its limit point (2.0625e-4) and
+/// the periodic one not yet (2.076e-4), so there the periodic stress is 35 % higher. The
+/// limit-point stresses themselves differ by less than 0.1 % (linear the higher). On the
+/// section 5.2.1 path linear is stiffer at every increment.
 #[test]
 fn linear_bc_is_stiffer_than_periodic() {
     let (mp, ml) = (
@@ -616,57 +679,59 @@ fn linear_bc_is_stiffer_than_periodic() {
         model("scenes/paper/rve_linear.toml", &[]),
     );
     let elastic = (ml.elastic_tangent()[0] - mp.elastic_tangent()[0]) / mp.elastic_tangent()[0];
-    let per = run("scenes/paper_rve.toml", &[]);
-    let lin = run("scenes/paper/rve_linear.toml", &[]);
-    let gap: Vec<f64> = per
-        .iter()
-        .zip(&lin)
-        .map(|(a, b)| (b.stress[0] - a.stress[0]) / a.stress[0])
-        .collect();
-    let shown: Vec<String> = gap.iter().map(|g| format!("{g:.1e}")).collect();
-    println!("elastic D11 gap {elastic:.2e}; s_xx gap along the path {shown:?}");
-    // The spaces of fluctuations are nested: linear >= periodic from the elastic tangent
-    // (tests/solver_verification.rs checks the whole ordering) to every increment.
-    assert!(elastic > 0.0);
-    assert!(
-        gap.iter().all(|&g| g > 0.0),
-        "linear below periodic somewhere"
-    );
-    // Very similar at first (1.4e-4), more evident with dissipation: an order of
-    // magnitude larger at increment 18 (98 % of the peak; 28 times measured) and above
-    // 1 % after the peak (3-4 % measured).
-    assert!(gap[0] < 1e-3 && gap[17] > 10.0 * gap[0]);
-    assert!(gap[18] > 0.01 && gap[19] > 0.01);
+    // The spaces of fluctuations are nested: linear >= periodic in the elastic range
+    // (tests/solver_verification.rs checks the whole ordering).
+    assert!(elastic > 0.0, "{elastic:.1e}");
 
-    // The cycle of Fig. 16 with both BCs.
+    // The cycle of Fig. 16 with both BCs: linear minus periodic, relative to periodic,
+    // signed so that positive is stiffer in tension and in compression.
     let cp = run("scenes/paper_rve_cycle.toml", &[]);
     let cl = run("scenes/paper/cycle_linear.toml", &[]);
-    for k in (0..60).filter(|&k| k != 17) {
-        assert!(
-            cl[k].stress[0] * cl[k].eps[0].signum() > cp[k].stress[0] * cp[k].eps[0].signum(),
-            "cycle increment {}",
-            k + 1
-        );
-    }
-    // The exception (see above).
+    let gap: Vec<f64> = cp
+        .iter()
+        .zip(&cl)
+        .map(|(p, l)| (l.stress[0] - p.stress[0]) * p.eps[0].signum() / p.stress[0].abs())
+        .collect();
+    let shown: Vec<String> = gap.iter().map(|g| format!("{g:.1e}")).collect();
+    println!("elastic D11 gap {elastic:.2e}; s_xx gap along the cycle {shown:?}");
+    let below: Vec<usize> = (0..60).filter(|&k| gap[k] <= 0.0).map(|k| k + 1).collect();
+    assert_eq!(below, [18], "increments where linear is not the stiffer");
+    // Very similar at first, more evident with dissipation: at increment 17 (97 % of the
+    // peak) the gap is an order of magnitude larger than at the first, and after the
+    // snap (increments 19-20) above 1 %.
+    assert!(gap[0] < limit("linear_bc.first_gap_below"), "{shown:?}");
+    assert!(gap[16] > limit("linear_bc.growth") * gap[0], "{shown:?}");
+    let post = limit("linear_bc.post_peak_gap");
+    assert!(gap[18] > post && gap[19] > post, "{shown:?}");
+    // The exception: linear has passed its limit point, periodic not yet.
     assert!(cp[17].stress[0] > 1.3 * cl[17].stress[0]);
     let (pp, pl) = (peak_x_periodic(), peak_x_linear());
     assert!(pl.strain < cp[17].eps[0] && cp[17].eps[0] < pp.strain);
-    assert!(rel(pl.stress, pp.stress) < 1e-3, "{pp:?} {pl:?}");
+    assert!(pl.stress > pp.stress, "{pp:?} {pl:?}");
+    assert!(
+        rel(pl.stress, pp.stress) < limit("linear_bc.limit_point_rel"),
+        "{pp:?} {pl:?}"
+    );
+
+    // The section 5.2.1 path: linear stiffer at every increment.
+    let per = run("scenes/paper_rve.toml", &[]);
+    let lin = run("scenes/paper/rve_linear.toml", &[]);
+    assert!(
+        per.iter().zip(&lin).all(|(a, b)| b.stress[0] > a.stress[0]),
+        "linear below periodic somewhere on the 5.2.1 path"
+    );
 }
 
 /// Fig. 17: lambda_p from 1e4 to 1e9 N/mm on the cycle; "for high values, the penalty
 /// factor does not influence the behavior of the numerical responses ... 10^7 can be
 /// considered as a reasonable penalty factor".
 ///
-/// Discrepancy: with the paper's contact law (the penalty on both components, sliding
-/// measured from the reference configuration; the shipped scenes' law) the cycle cannot
-/// be followed for lambda_p >= 1e7: the solver gives up in the snap after the tension
-/// peak, where the first ITZ points close. With `contact_shear = "cohesive"` (penalty on
-/// the normal only) every lambda_p goes through, which points at the paper's shear jump
-/// at closure (lambda_p l_e delta_s, sliding counted from the reference configuration;
-/// README, `contact_shear`) as the cause. The sweep is therefore run with
-/// `contact_shear = "cohesive"`, where the paper's claim holds.
+/// In agreement with both contact laws, each swept over every lambda_p: the paper's
+/// (`contact_shear = "penalty"`, the shipped scenes' law: the penalty on both components,
+/// sliding measured from the reference configuration) and `contact_shear = "cohesive"`
+/// (the project's own law, penalty on the normal only). Every value goes through with
+/// the contact status held within a Newton iteration (the default;
+/// docs/contact-algorithm.md).
 #[test]
 fn penalty_study() {
     const CYCLE: &str = "scenes/paper_rve_cycle.toml";
@@ -706,32 +771,41 @@ fn penalty_study() {
         (curves, dist)
     };
 
-    // Cohesive contact shear. Converged from 1e7 up: within 1 % of 1e9 (0.4 % measured)
-    // and 1e8 within 0.1 %, while 1e4 and 1e5 are off by 43 % and 13 %.
+    let (converged, off_1e4, off_1e5) = (
+        limit("fig17.converged"),
+        limit("fig17.off_1e4"),
+        limit("fig17.off_1e5"),
+    );
+    // Cohesive contact shear. Converged from 1e7 up, while 1e4 and 1e5 are far off.
     let (_, dist) = study("cohesive");
-    assert!(dist[3] < 0.01 && dist[4] < 1e-3, "{dist:?}");
-    assert!(dist[0] > 0.2 && dist[1] > 0.05, "{dist:?}");
-    // The penalty error decays like 1 / lambda_p: at least a factor 3 per decade.
+    assert!(
+        dist[3] < converged && dist[4] < limit("fig17.cohesive_1e8"),
+        "{dist:?}"
+    );
+    assert!(dist[0] > off_1e4 && dist[1] > off_1e5, "{dist:?}");
+    // The penalty error decays like 1 / lambda_p.
     for k in 0..4 {
-        assert!(dist[k + 1] < dist[k] / 3.0, "{dist:?}");
+        assert!(
+            dist[k + 1] < dist[k] / limit("fig17.decay_per_decade"),
+            "{dist:?}"
+        );
     }
 
-    // The paper's law (with the contact status held within a Newton iteration, the
-    // default; read at every evaluation it failed from 1e6 up, see
-    // docs/contact-algorithm.md): every value goes through, and from 1e7 up the response
-    // is within 1 % of 1e9 (0.69 % and 0.075 % measured: the largest difference is after
-    // the snap, where the increments land on different post-snap equilibria), while 1e4
-    // and 1e5 are off by 47 % and 12 %. At the end of the
-    // compression branch the stress converges first order: 1.5e-3 (1e7), 1.4e-4 (1e8).
+    // The paper's law: every value goes through, and from 1e7 up the response is within
+    // `converged` of 1e9 (the largest difference is after the snap, where the increments
+    // land on different post-snap equilibria), while 1e4 and 1e5 are far off. At the end
+    // of the compression branch the stress converges first order in 1 / lambda_p.
     let (paper, dist) = study("penalty");
-    assert!(dist[3] < 0.01 && dist[4] < 0.01, "{dist:?}");
-    assert!(dist[0] > 0.2 && dist[1] > 0.05, "{dist:?}");
+    assert!(dist[3] < converged && dist[4] < converged, "{dist:?}");
+    assert!(dist[0] > off_1e4 && dist[1] > off_1e5, "{dist:?}");
     let end: Vec<f64> = paper
         .iter()
         .map(|c| (c[59].stress[0] - paper[5][59].stress[0]).abs() / paper[5][59].stress[0].abs())
         .collect();
     assert!(
-        end[3] < 1e-2 && end[4] < 1e-3 && end[4] < end[3] / 3.0,
+        end[3] < limit("fig17.end_1e7")
+            && end[4] < limit("fig17.end_1e8")
+            && end[4] < end[3] / limit("fig17.decay_per_decade"),
         "{end:?}"
     );
     // Its compression stiffness converges above the cohesive shear's (28246 against

@@ -63,7 +63,12 @@ pub fn solve_fixed(
             });
         }
         ws.factorization()
-            .factorize(model.linear_solver(), &disc.pattern.symbolic, &k, true)
+            .factorize(
+                model.linear_solver(),
+                &disc.pattern.symbolic,
+                &k,
+                rve::solver::FactorUse::Reusable,
+            )
             .ok()?;
         let mut dx: Vec<f64> = r.iter().map(|v| -v).collect();
         ws.factorization().solve(model.linear_solver(), &mut dx, 1);

@@ -9,6 +9,7 @@
 //! function runs inside a panic boundary; the detailed message of the last failure on a
 //! thread is `rve_last_error`.
 
+mod abi_version;
 mod batch;
 mod boundary;
 mod init;
@@ -20,23 +21,21 @@ mod version;
 
 pub use crate::model::cache::model_builds;
 pub use crate::state::STATE_FORMAT_VERSION;
-pub use batch::rve_update_batch;
+pub use batch::{rve_update_batch, rve_update_batch_timed};
 pub use boundary::rve_last_error;
 pub use init::rve_init;
 pub use instance::{
-    rve_clone_model, rve_commit, rve_free, rve_init_file, rve_init_text, rve_model_builds,
-    rve_path_len, rve_path_point, rve_reset, rve_revert, rve_state_load, rve_state_save,
-    rve_state_size, rve_update, rve_update_ex, RveHandle, RveInfo, RveReliability,
-    RveTangentRequest,
+    rve_clone_model, rve_commit, rve_fast_updates, rve_free, rve_init_file, rve_init_text,
+    rve_model_builds, rve_path_len, rve_path_point, rve_reset, rve_revert, rve_state_load,
+    rve_state_save, rve_state_size, rve_update, rve_update_ex, rve_write_vtk, RveHandle, RveInfo,
+    RveReliability, RveTangentRequest,
 };
 pub use registry::live_instances;
 pub use status::{rve_status_message, RveStatus, ALL_STATUSES};
 pub use umat::rve_umat;
 pub use version::{rve_abi_version, rve_version, rve_version_number};
 
-/// ABI version: the suffix of the soname `librve.so.<ABI_VERSION>`, also the header's
-/// `RVE_ABI_VERSION`. Bump on any incompatible change of the C interface.
-pub const ABI_VERSION: u32 = 0;
+pub use abi_version::ABI_VERSION;
 
 /// The detailed message of the last failed call on this thread (Rust tests).
 pub fn last_error_message() -> String {

@@ -48,7 +48,7 @@
 //! read from the gaps at each arc point, a sliding point whose gap closed on the way
 //! makes the arc point no equilibrium and the path was lost; held at the trace's start
 //! status with no release, the cycle of the penalty study lands on another post-snap
-//! equilibrium; releasing the closed points as well costs 9 % more factorizations.
+//! equilibrium; releasing the closed points as well costs more factorizations.
 //!
 //! # Corners
 //! The sign of each step keeps the way the path went (`direction`): right at a smooth
@@ -61,9 +61,8 @@
 //! load there (the path goes on dissipating), at least [`CORNER_LOADING`] of those loading
 //! at the arc point: otherwise it is the (nearly) elastic unloading branch of the arc
 //! point, which leads back past the start of the strain history, and the attempt counts
-//! as failed. Measured in `docs/solver.md`: the three paper-law increments
-//! that lost their trace at such a corner and fell back to secant iterations (175-195
-//! factorizations) take 118-137.
+//! as failed. `docs/solver.md` measures what it saves: the paper-law increments that lost
+//! their trace at such a corner fell back to secant iterations.
 //!
 //! If that fails too, the next attempt goes forward again over a long arc,
 //! [`CORNER_JUMP`] times the last one that converged at the arc point. Short arcs end
@@ -72,8 +71,8 @@
 //! clear again. Its point is accepted like any other; one past the target lands from the
 //! interpolation. Measured in `docs/solver.md`: on the robustness paths it fires three
 //! times (tension along y with both laws, a uniaxial stress with the cohesive shear),
-//! every time reaching past the target and landing, instead of a lost trace and secant
-//! iterations (118-375 factorizations; 66-90 now).
+//! every time reaching past the target and landing, where a lost trace would fall back
+//! to secant iterations.
 //!
 //! # When a trace stops
 //! Besides the cuts below, a corrector gives up once its iterates cycle: an interface
@@ -88,10 +87,10 @@
 //! arcs under [`CRAWL_FRACTION`] of the first.
 
 use super::contact;
-use super::newton::{comes_back, newton, Mode};
+use super::newton::{comes_back, newton, Mode, CYCLE_WINDOW};
 use super::problem::{dot, Problem, Strain};
 use super::settings::Settings;
-use super::workspace::{TraceBuffers, Workspace};
+use super::workspace::{FactorUse, TraceBuffers, Workspace};
 use crate::interface::TangentKind;
 use crate::state::State;
 
@@ -127,10 +126,8 @@ const CORNER_JUMP: f64 = 4.0;
 const CORNER_LOADING: f64 = 0.1;
 /// Growth of the arc length after a converged point.
 const GROWTH: f64 = 1.25;
-/// Iterations back over which a corrector looks for a branch set that comes back.
-const CYCLE_WINDOW: usize = 4;
 /// Corrector iterations spent looking for an arc point with released points.
-const RELEASE_BUDGET: usize = 6;
+const RELEASE_BUDGET: usize = super::newton::RELEASE_BUDGET as usize;
 
 /// Work and progress of one traced path, counted whether or not it lands.
 #[derive(Default)]
@@ -487,7 +484,7 @@ fn direction(points: u32, trace: &TraceBuffers) -> f64 {
 /// fresh factorization; false if `K` is singular.
 fn tangent_at(problem: &Problem, strain: &Strain, trial: &State, ws: &mut Workspace) -> bool {
     problem.evaluate(&trial.unknowns, strain, TangentKind::Consistent, ws);
-    if problem.factorize(ws, false).is_err() {
+    if problem.factorize(ws, FactorUse::OneUse).is_err() {
         return false;
     }
     load_direction(problem, ws);
@@ -668,7 +665,7 @@ impl Tracer<'_, '_> {
     /// constraint).
     fn riks_step(&mut self, dt_pred: f64) -> Option<f64> {
         let (problem, ws) = (self.problem, &mut *self.ws);
-        problem.factorize(ws, false).ok()?;
+        problem.factorize(ws, FactorUse::OneUse).ok()?;
         self.work.iterations += 1;
         // dx_R into ws.dx, dx_f into ws.trace.dxf (both with this factorization).
         ws.dx

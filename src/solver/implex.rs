@@ -38,7 +38,7 @@
 
 use super::problem::{Problem, Strain};
 use super::settings::IncrementReport;
-use super::workspace::Workspace;
+use super::workspace::{FactorUse, Workspace};
 use crate::error::{Error, Result};
 use crate::interface::{Implex, TangentKind};
 use crate::state::{held_contact_words, LinearBranch, State, JUMP_OPERATOR_LEN};
@@ -103,11 +103,13 @@ pub fn factorize_step(
     } else {
         ws.current.k.copy_from_slice(&disc.k_const);
     }
-    problem.factorize(ws, true).map_err(|e| Error::Solve {
-        reason: format!("singular RVE tangent on the IMPL-EX step's frozen branches ({e})"),
-        depth: 0,
-        suggested_step_ratio: 0.5,
-    })?;
+    problem
+        .factorize(ws, FactorUse::Reusable)
+        .map_err(|e| Error::Solve {
+            reason: format!("singular RVE tangent on the IMPL-EX step's frozen branches ({e})"),
+            depth: 0,
+            suggested_step_ratio: 0.5,
+        })?;
     let g = &disc.g;
     ws.factorization.solve_g(problem.linear, g);
     Ok(super::tangent::condensed(g, ws.factorization.kg(), None))

@@ -32,7 +32,7 @@ use super::predictor::{predict, store_curvature, Prediction, StrainStep};
 use super::problem::{accept_candidate, norm, sensitivity_times, Problem, Strain};
 use super::settings::{IncrementReport, Settings, TangentRequest};
 use super::tangent::{condensed, condensed_tangent};
-use super::workspace::Workspace;
+use super::workspace::{FactorUse, Workspace};
 use crate::error::{Error, Result};
 use crate::interface::TangentKind;
 use crate::state::State;
@@ -211,7 +211,7 @@ fn polish(problem: &Problem, strain: &Strain, trial: &mut State, ws: &mut Worksp
     {
         return false;
     }
-    if problem.factorize(ws, true).is_err() {
+    if problem.factorize(ws, FactorUse::Reusable).is_err() {
         return false;
     }
     ws.dx

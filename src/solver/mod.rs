@@ -1,14 +1,14 @@
 //! Solution of the RVE equilibrium problem at a macro strain: the problem's residual and
-//! tangent (`problem`), sparse factorizations (`linear`), the predictor, the Newton kernel,
-//! path following (`arclength`), the condensed tangent, and the sub-stepping driver with
-//! its remedy ladder (`increment`) above them. The per-thread `workspace` holds every
+//! tangent (`problem`), sparse direct factorizations (`sparse_direct`), the predictor, the
+//! Newton kernel, path following (`arclength`), the condensed tangent, and the
+//! sub-stepping driver with its remedy ladder (`increment`) above them. The per-thread `workspace` holds every
 //! buffer, so a solve allocates nothing.
 //!
 //! The fast path (`fast_path`) answers updates that keep every interface point on its
 //! linear branch without any of them.
 //!
 //! Dependencies inside: `increment -> {fast_path, predictor, newton, arclength, tangent}`,
-//! `arclength -> newton`, all of them `-> contact -> problem -> {linear, workspace,
+//! `arclength -> newton`, all of them `-> contact -> problem -> {sparse_direct, workspace,
 //! settings}`.
 
 mod arclength;
@@ -16,11 +16,11 @@ mod contact;
 pub mod fast_path;
 pub mod implex;
 mod increment;
-mod linear;
 mod newton;
 mod predictor;
 mod problem;
 mod settings;
+mod sparse_direct;
 pub mod step_check;
 mod supernodal_solve;
 mod tangent;
@@ -29,13 +29,13 @@ mod workspace;
 pub use increment::solve_increment;
 #[cfg(any(test, feature = "internals"))]
 pub use increment::Solved;
-#[cfg(any(test, feature = "internals"))]
-pub use linear::NumericFactor;
-pub use linear::{FactorKind, LinearSolver};
 pub use problem::Problem;
 #[cfg(any(test, feature = "internals"))]
 pub use problem::Strain;
 pub use settings::{Answer, ContactStatus, IncrementReport, Integration, Settings, TangentRequest};
+pub use sparse_direct::{FactorKind, LinearSolver};
 #[cfg(any(test, feature = "internals"))]
-pub use workspace::Factorization;
+pub use sparse_direct::{FactorMethod, NumericFactor};
 pub use workspace::Workspace;
+#[cfg(any(test, feature = "internals"))]
+pub use workspace::{FactorUse, Factorization};

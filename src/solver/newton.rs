@@ -37,7 +37,7 @@
 use super::contact;
 use super::problem::{accept_candidate, norm, Problem, Strain};
 use super::settings::Settings;
-use super::workspace::Workspace;
+use super::workspace::{FactorUse, Workspace};
 use crate::interface::TangentKind;
 
 /// How a Newton loop globalizes.
@@ -100,12 +100,14 @@ const STAGNATION_WINDOW: usize = 10;
 /// converges within them, with the start's status, where a switch would throw the iterate
 /// out by the traction jump (up to 1e2 of the reference on the hard cases).
 const PINNED_CORRECTIONS: u32 = 2;
-/// Corrections spent looking for an equilibrium with released pinned points.
-const RELEASE_BUDGET: u32 = 6;
+/// Corrections spent looking for an equilibrium with released pinned points (here and in
+/// the path following's corrector).
+pub(super) const RELEASE_BUDGET: u32 = 6;
 /// [`Mode::NewtonUntilStagnant`] also gives up once an iterate's interface branch set is
 /// one of the last this many iterates' without the residual having halved since: a
-/// semismooth Newton that comes back to a branch set without progress cycles.
-const CYCLE_WINDOW: usize = 4;
+/// semismooth Newton that comes back to a branch set without progress cycles. The path
+/// following's corrector looks back as far.
+pub(super) const CYCLE_WINDOW: usize = 4;
 /// Secant iterations hand over to Newton below this multiple of the tolerance.
 const SECANT_HANDOVER: f64 = 100.0;
 
@@ -409,7 +411,14 @@ fn correction(
     let fresh = !(chord && ws.factorization.is_reusable());
     if fresh {
         problem
-            .factorize(ws, kind == TangentKind::Consistent)
+            .factorize(
+                ws,
+                if kind == TangentKind::Consistent {
+                    FactorUse::Reusable
+                } else {
+                    FactorUse::OneUse
+                },
+            )
             .map_err(|e| Failure::Singular(e.to_string()))?;
     }
     if fresh && ws.factorization.is_reusable() {

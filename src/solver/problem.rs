@@ -9,9 +9,9 @@
 //! Newton, path following, the predictor and the condensed tangent all work through it,
 //! and none of them through another.
 
-use super::linear::{FactorKind, LinearSolver};
 use super::settings::Settings;
-use super::workspace::{Evaluation, Workspace};
+use super::sparse_direct::{FactorKind, LinearSolver};
+use super::workspace::{Evaluation, FactorUse, Workspace};
 use crate::assembly::Discretization;
 use crate::error::LinearAlgebraError;
 use crate::interface::TangentKind;
@@ -104,18 +104,18 @@ impl Problem<'_> {
         );
     }
 
-    /// Factorizes the current matrix; `reusable`: it is the consistent tangent `dR/dx` and
-    /// its factors may serve chord corrections and the condensed tangent.
+    /// Factorizes the current matrix; [`FactorUse::Reusable`]: it is the consistent tangent
+    /// `dR/dx` and its factors may serve chord corrections and the condensed tangent.
     pub(super) fn factorize(
         &self,
         ws: &mut Workspace,
-        reusable: bool,
+        use_: FactorUse,
     ) -> Result<FactorKind, LinearAlgebraError> {
         ws.factorization.factorize(
             self.linear,
             &self.disc.pattern.symbolic,
             &ws.current.k,
-            reusable,
+            use_,
         )
     }
 

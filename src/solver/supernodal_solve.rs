@@ -31,8 +31,8 @@ pub(super) fn scratch_len(s: &SymbolicSupernodalCholesky<usize>) -> usize {
 
 /// Solves `A x = b` in place for the `ncols` columns of `rhs` (column-major), one at a
 /// time, with the LDL^T factor values `l` of the analysis `s` and its permutation `perm`.
-/// `scratch` has at least [`scratch_len`] entries. Allocates nothing. (Substituting 4
-/// columns together, each block read once, measured no faster.)
+/// `scratch` has at least [`scratch_len`] entries. Allocates nothing. (Substituting
+/// several columns together, each block read once, is no faster: `docs/solver.md`.)
 pub(super) fn solve_ldlt(
     s: &SymbolicSupernodalCholesky<usize>,
     perm: Option<PermRef<'_, usize>>,

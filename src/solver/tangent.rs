@@ -15,7 +15,7 @@
 //!   once more.
 
 use super::problem::{norm, Problem};
-use super::workspace::Workspace;
+use super::workspace::{FactorUse, Workspace};
 use crate::error::{Error, Result};
 
 /// Refinement sweeps the condensed tangent may take before a fresh factorization is
@@ -53,11 +53,13 @@ pub(super) fn condensed_tangent(problem: &Problem, ws: &mut Workspace) -> Result
             return Ok(c);
         }
     }
-    problem.factorize(ws, true).map_err(|e| Error::Solve {
-        reason: format!("singular RVE tangent at the converged state ({e:?})"),
-        depth: 0,
-        suggested_step_ratio: 0.5,
-    })?;
+    problem
+        .factorize(ws, FactorUse::Reusable)
+        .map_err(|e| Error::Solve {
+            reason: format!("singular RVE tangent at the converged state ({e:?})"),
+            depth: 0,
+            suggested_step_ratio: 0.5,
+        })?;
     let g = &problem.disc.g;
     ws.factorization.solve_g(problem.linear, g);
     Ok(condensed(g, ws.factorization.kg(), None))

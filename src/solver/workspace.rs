@@ -9,7 +9,7 @@ use crate::error::LinearAlgebraError;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMat;
 
-use super::linear::{FactorKind, LinearSolver, NumericFactor};
+use super::sparse_direct::{FactorKind, FactorMethod, LinearSolver, NumericFactor};
 use crate::assembly::{Discretization, SystemEvaluation};
 use crate::state::State;
 
@@ -31,6 +31,16 @@ impl Evaluation {
             counts: SystemEvaluation::default(),
         }
     }
+}
+
+/// What a factorization is for, given to [`Factorization::factorize`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FactorUse {
+    /// A consistent tangent: chord corrections and the condensed tangent may reuse its
+    /// factors.
+    Reusable,
+    /// A secant matrix or a path direction: the factors serve one purpose only.
+    OneUse,
 }
 
 /// The numeric factorization of a workspace and the facts tied to it.
@@ -60,17 +70,17 @@ impl Factorization {
         }
     }
 
-    /// Factorizes `values` (on `pattern`). `reusable`: they are a consistent tangent whose
-    /// factors chord corrections and the condensed tangent may reuse (the values are then
-    /// kept, to recognise an unchanged tangent); otherwise the factors serve one purpose
-    /// only (a secant matrix, a path direction). Whatever depended on the previous factors
-    /// is invalidated.
+    /// Factorizes `values` (on `pattern`). [`FactorUse::Reusable`]: they are a consistent
+    /// tangent whose factors chord corrections and the condensed tangent may reuse (the
+    /// values are then kept, to recognise an unchanged tangent); [`FactorUse::OneUse`]: the
+    /// factors serve one purpose only (a secant matrix, a path direction). Whatever
+    /// depended on the previous factors is invalidated.
     pub fn factorize(
         &mut self,
         linear: &LinearSolver,
         pattern: &SymbolicSparseColMat<usize>,
         values: &[f64],
-        reusable: bool,
+        use_: FactorUse,
     ) -> Result<FactorKind, LinearAlgebraError> {
         self.kg_of_factor = false;
         self.consistent = false;
@@ -78,10 +88,10 @@ impl Factorization {
             pattern,
             values,
             &mut self.numeric,
-            true,
+            FactorMethod::SymmetricFirst,
             MemStack::new(&mut self.stack),
         )?;
-        if reusable {
+        if use_ == FactorUse::Reusable {
             self.matrix.copy_from_slice(values);
             self.consistent = true;
         }

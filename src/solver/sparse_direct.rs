@@ -102,6 +102,15 @@ pub struct NumericFactor {
     pub solves: [u64; 5],
 }
 
+/// How [`LinearSolver::factorize`] factorizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FactorMethod {
+    /// LDL^T first (when the pattern allows it), then LBL^T, then LU.
+    SymmetricFirst,
+    /// LU only.
+    Lu,
+}
+
 /// Symbolic analyses of one pattern, shared by every instance of a model.
 pub struct LinearSolver {
     lu: SymbolicLu<usize>,
@@ -296,21 +305,22 @@ impl LinearSolver {
         StackReq::any_of(&reqs)
     }
 
-    /// Factorizes the matrix with `values` on `pattern`: LDL^T when `try_symmetric`
-    /// (accepted at once if positive definite, else checked), else a checked LBL^T, else
-    /// LU. Returns the kind used.
+    /// Factorizes the matrix with `values` on `pattern`: with
+    /// [`FactorMethod::SymmetricFirst`] LDL^T (accepted at once if positive definite, else
+    /// checked), else a checked LBL^T, else LU; with [`FactorMethod::Lu`] LU. Returns the
+    /// kind used.
     pub fn factorize(
         &self,
         pattern: &SymbolicSparseColMat<usize>,
         values: &[f64],
         numeric: &mut NumericFactor,
-        try_symmetric: bool,
+        method: FactorMethod,
         stack: &mut MemStack,
     ) -> std::result::Result<FactorKind, LinearAlgebraError> {
         numeric.current = None;
         numeric.count += 1;
         let a = SparseColMatRef::new(pattern.as_ref(), values);
-        if let (true, Some(c)) = (try_symmetric, &self.symmetric) {
+        if let (FactorMethod::SymmetricFirst, Some(c)) = (method, &self.symmetric) {
             c.permuted.gather(values, &mut numeric.permuted_values);
             if let Some(kind) = Self::ldlt(c, a, numeric, stack) {
                 if kind == FactorKind::LdltIndefinite {
@@ -601,7 +611,7 @@ mod tests {
                 &pattern,
                 &values,
                 &mut numeric,
-                true,
+                FactorMethod::SymmetricFirst,
                 MemStack::new(&mut stack),
             )
             .unwrap();

@@ -1,0 +1,340 @@
+"""The study toolkit: what every study script in scripts/ shares.
+
+- scenes: `load_scene`, `dump_scene`, `set_keys` (read with tomllib, edit the dictionary,
+  write it back as TOML: one scene editor for every study);
+- running: `run_rve` (one `rve run` with its response rows, status and wall time),
+  `Runner` (variants run a few times each, with median timings);
+- formatting: `pct` (a fraction as a percentage, "0.64 %"), `ms` (seconds as ms);
+- plots: `svg_plot` (curves and points, linear or log axes, plain SVG); and a shell
+  interface (`main`) for scripts/paper-examples.
+
+Import it as `import studykit` from a script in scripts/ (Python puts the script's own
+folder first on the import path). Standard library only (Python 3.11+ for tomllib).
+"""
+
+import csv
+import json
+import math
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+import tomllib
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+RVE = os.path.join(ROOT, "target", "release", "rve")
+
+
+# ------------------------------------------------------------------------------- scenes
+def load_scene(path):
+    """A scene file as a dictionary; mesh files (`file = ...`) made absolute, so that the
+    scene can be written anywhere."""
+    with open(path, "rb") as f:
+        scene = tomllib.load(f)
+    _absolutize(scene, os.path.dirname(os.path.abspath(path)))
+    return scene
+
+
+def _absolutize(node, base):
+    if isinstance(node, dict):
+        for k, v in node.items():
+            if k == "file" and isinstance(v, str) and not os.path.isabs(v):
+                node[k] = os.path.normpath(os.path.join(base, v))
+            else:
+                _absolutize(v, base)
+    elif isinstance(node, list):
+        for v in node:
+            _absolutize(v, base)
+
+
+def set_keys(scene, edits):
+    """`scene` with each dotted key of `edits` set ("geometry.seed": 11,
+    "materials.itz.penalty.lambda_p": 1e7, "path.0.increments": 40 for the first `[[path]]`,
+    "path": [{...}] for a new path). The tables on
+    the way must exist, so that a misspelt key fails here and not as a silent new key in
+    the scene; the last key may be new (a setting the scene leaves at its default)."""
+    for dotted, value in edits.items():
+        *tables, key = dotted.split(".")
+        node = scene
+        for t in tables:
+            if isinstance(node, list):  # an array of tables: "path.0.increments"
+                node = node[int(t)]
+            elif t in node:
+                node = node[t]
+            else:
+                raise KeyError(f"scene has no table `{t}` (in `{dotted}`)")
+        node[key] = value
+    return scene
+
+
+def _value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, list):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + " }"
+    raise TypeError(f"no TOML value for {v!r}")
+
+
+def _is_table_array(v):
+    return isinstance(v, list) and v and all(isinstance(x, dict) for x in v)
+
+
+def dump_scene(scene):
+    """TOML text of a scene dictionary: top-level tables as `[table]` sections (nested
+    tables inline), lists of tables as `[[name]]`. Floats are written with `repr`, which
+    reads back to the same double."""
+    out = []
+    for k, v in scene.items():
+        if not isinstance(v, dict) and not _is_table_array(v):
+            out.append(f"{k} = {_value(v)}")
+    for k, v in scene.items():
+        if isinstance(v, dict):
+            out += ["", f"[{k}]"] + [f"{kk} = {_value(vv)}" for kk, vv in v.items()]
+    for k, v in scene.items():
+        if _is_table_array(v):
+            for item in v:
+                out += ["", f"[[{k}]]"] + [f"{kk} = {_value(vv)}" for kk, vv in item.items()]
+    return "\n".join(out).lstrip("\n") + "\n"
+
+
+def write_scene(base, edits, path):
+    """Writes `base` (a scene file) with `edits` (see `set_keys`) to `path`; returns path."""
+    with open(path, "w") as f:
+        f.write(dump_scene(set_keys(load_scene(base), edits)))
+    return path
+
+
+def line_path(to, increments):
+    """A `[[path]]` list of one straight segment."""
+    return [{"to": list(to), "increments": increments}]
+
+
+# ------------------------------------------------------------------------------ running
+class Run:
+    """One `rve run`: `rows` (response.csv as floats; the increments before a failure),
+    `ok`, `status` ("ok" or the last line of the error), `wall` (seconds)."""
+
+    def __init__(self, rows, ok, status, wall):
+        self.rows, self.ok, self.status, self.wall = rows, ok, status, wall
+
+
+def read_response(out_dir):
+    """response.csv of an `rve run --out out_dir` as a list of dicts of floats."""
+    path = os.path.join(out_dir, "response.csv")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def run_rve(scene, out_dir, rve=RVE, extra=()):
+    """Runs `rve run SCENE --out OUT_DIR --quiet` and reads its response."""
+    t0 = time.perf_counter()
+    p = subprocess.run([rve, "run", scene, "--out", out_dir, "--quiet", *extra],
+                       capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    lines = [line for line in p.stderr.splitlines() if line.strip()]
+    status = "ok" if p.returncode == 0 else (lines[-1] if lines else f"exit {p.returncode}")
+    return Run(read_response(out_dir), p.returncode == 0, status, wall)
+
+
+# --------------------------------------------------------------------------- formatting
+def pct(x, digits=2):
+    """A fraction as a percentage with `digits` significant digits: 0.0064 -> "0.64 %"."""
+    return f"{100 * x:.{digits}g} %"
+
+
+# ------------------------------------------------------------------- repeated runs
+class Runner:
+    def __init__(self, rve, tmp, repeats, budget):
+        self.rve, self.tmp, self.repeats, self.budget = rve, tmp, repeats, budget
+        self.count = 0
+        self.wall = 0.0
+        # Increments of the first run of every variant, and those the fast path answered.
+        self.increments = 0
+        self.fast = 0
+
+    def mesh_stats(self, scene):
+        out = subprocess.run([self.rve, "mesh", scene, "--json"], capture_output=True,
+                             text=True, check=True).stdout
+        return json.loads(out)
+
+    def run(self, name, base, edits):
+        """Run a variant REPEATS times; return a dict with the rows and median timings.
+
+        A run that fails (the solver gives up at some increment) is not repeated; its
+        response.csv holds the increments before the failure, which are kept (`failed`
+        holds the error message)."""
+        scene = write_scene(base, edits, os.path.join(self.tmp, name + ".toml"))
+        totals, medians, rows, failed = [], [], None, None
+        spent = 0.0
+        for r in range(self.repeats):
+            if r > 0 and spent > self.budget:
+                break  # expensive variant: fewer repeats keep the study within minutes
+            out = os.path.join(self.tmp, "%s.%d" % (name, r))
+            run = run_rve(scene, out, rve=self.rve)
+            self.wall += run.wall
+            spent += run.wall
+            self.count += 1
+            rr = run.rows
+            shutil.rmtree(out, ignore_errors=True)
+            if not run.ok:
+                msg = run.status
+                m = re.search(r"relative residual ([0-9.eE+-]+)", msg)
+                failed = "solver gave up after increment %d (eps_xx = %.4g)%s" % (
+                    len(rr), rr[-1]["eps_xx"] if rr else 0.0,
+                    ", residual %s" % m.group(1) if m else ": " + msg)
+                print("note: %s: %s" % (name, msg), file=sys.stderr)
+            secs = [row["seconds"] for row in rr] or [0.0]
+            totals.append(sum(secs))
+            medians.append(statistics.median(secs))
+            if rows is None:
+                rows = rr
+                self.increments += len(rr)
+                self.fast += int(sum(row.get("fast", 0.0) for row in rr))
+            elif any(a["sig_xx"] != b["sig_xx"] or a["iterations"] != b["iterations"]
+                     for a, b in zip(rows, rr)):
+                print("warning: %s is not reproducible across repeats" % name, file=sys.stderr)
+            if failed:
+                break
+        return {
+            "name": name, "scene": scene, "rows": rows, "failed": failed,
+            "runs": len(totals), "total": statistics.median(totals), "total_min": min(totals),
+            "total_max": max(totals), "per_inc": statistics.median(medians),
+            "iterations": int(sum(r["iterations"] for r in rows)),
+            "max_iterations": int(max([r["iterations"] for r in rows] or [0])),
+            "max_substeps": int(max([r["substeps"] for r in rows] or [0])),
+        }
+
+
+def ms(x):
+    """Seconds as milliseconds for a table cell: two significant digits below 0.1 ms, one
+    decimal below 10 s, none above."""
+    if 1e3 * x < 0.1:
+        return "%.2g" % (1e3 * x)
+    return "%.1f" % (1e3 * x) if x < 10 else "%.0f" % (1e3 * x)
+
+
+# ------------------------------------------------------------------------------ plots
+def svg_plot(path, title, xlabel, ylabel, series, logx=False, logy=False, w=640, h=420,
+             legend=160):
+    """series: list of (label, colour, [(x, y, point_label)], draw_line[, marker radius,
+    default 3, 0 for none])."""
+    ml, mr, mt, mb = 70, legend, 40, 50
+    pw, ph = w - ml - mr, h - mt - mb
+    xs = [p[0] for s in series for p in s[2]]
+    ys = [p[1] for s in series for p in s[2]]
+    fx = (lambda v: math.log10(v)) if logx else (lambda v: v)
+    fy = (lambda v: math.log10(v)) if logy else (lambda v: v)
+
+    def span(vals, f, log):
+        lo, hi = min(f(v) for v in vals), max(f(v) for v in vals)
+        if log:
+            return math.floor(lo), math.ceil(hi) if math.ceil(hi) > math.floor(lo) else math.floor(lo) + 1
+        pad = 0.05 * (hi - lo or 1.0)
+        return (0.0 if lo >= 0 and lo < 0.3 * hi else lo - pad), hi + pad
+
+    x0, x1 = span(xs, fx, logx)
+    y0, y1 = span(ys, fy, logy)
+    X = lambda v: ml + (fx(v) - x0) / (x1 - x0) * pw
+    Y = lambda v: mt + ph - (fy(v) - y0) / (y1 - y0) * ph
+    o = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" '
+         'font-family="sans-serif" font-size="12">' % (w, h),
+         '<rect width="100%" height="100%" fill="white"/>',
+         '<text x="%d" y="22" font-size="14">%s</text>' % (ml, title),
+         '<rect x="%d" y="%d" width="%d" height="%d" fill="none" stroke="#333"/>' % (ml, mt, pw, ph)]
+
+    def ticks(a, b, log):
+        if log:
+            return [10.0 ** k for k in range(int(a), int(b) + 1)]
+        step = 10 ** math.floor(math.log10((b - a) / 5))
+        for m in (1, 2, 5, 10):
+            if (b - a) / (m * step) <= 6:
+                step *= m
+                break
+        t = math.ceil(a / step) * step
+        out = []
+        while t <= b + 1e-12:
+            out.append(t)
+            t += step
+        return out
+
+    for t in ticks(x0, x1, logx):
+        x = X(t)
+        o.append('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#ddd"/>' % (x, mt, x, mt + ph))
+        o.append('<text x="%.1f" y="%d" text-anchor="middle">%s</text>' % (x, mt + ph + 16, "%g" % t))
+    for t in ticks(y0, y1, logy):
+        y = Y(t)
+        o.append('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#ddd"/>' % (ml, y, ml + pw, y))
+        o.append('<text x="%d" y="%.1f" text-anchor="end">%s</text>' % (ml - 6, y + 4, "%g" % t))
+    o.append('<text x="%d" y="%d" text-anchor="middle">%s</text>' % (ml + pw / 2, h - 10, xlabel))
+    o.append('<text transform="translate(16,%d) rotate(-90)" text-anchor="middle">%s</text>'
+             % (mt + ph / 2, ylabel))
+    for k, (label, colour, pts, line, *radius) in enumerate(series):
+        if line and len(pts) > 1:
+            o.append('<polyline fill="none" stroke="%s" stroke-width="1.5" points="%s"/>'
+                     % (colour, " ".join("%.1f,%.1f" % (X(p[0]), Y(p[1])) for p in pts)))
+        for p in pts:
+            if (radius or [3])[0]:
+                o.append('<circle cx="%.1f" cy="%.1f" r="%g" fill="%s"/>'
+                         % (X(p[0]), Y(p[1]), (radius or [3])[0], colour))
+            if p[2]:
+                o.append('<text x="%.1f" y="%.1f" font-size="10">%s</text>'
+                         % (X(p[0]) + 5, Y(p[1]) - 5, p[2]))
+        ly = mt + 14 + 18 * k
+        o.append('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" stroke-width="2"/>'
+                 % (ml + pw + 10, ly - 4, ml + pw + 30, ly - 4, colour))
+        o.append('<text x="%d" y="%d">%s</text>' % (ml + pw + 34, ly, label))
+    o.append("</svg>")
+    with open(path, "w") as f:
+        f.write("\n".join(o) + "\n")
+
+
+COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf", "#7f7f7f"]
+
+
+# ---------------------------------------------------------------------- shell interface
+def _parse_value(text):
+    """A TOML value given on the command line: `0.0`, `"plane_strain"`,
+    `[{to = [8e-5, 0.0, 0.0], increments = 20}]`."""
+    return tomllib.loads(f"v = {text}")["v"]
+
+
+def main(argv):
+    """For shell scripts (scripts/paper-examples):
+
+    studykit.py scene SRC OUT [KEY=VALUE ...]   SRC with the dotted keys set, to OUT
+    studykit.py run NAME SCENE WORK             rve run into WORK/NAME; writes
+                                                WORK/NAME/status ("ok" or the error)
+    """
+    if len(argv) >= 3 and argv[0] == "scene":
+        edits = {}
+        for item in argv[3:]:
+            key, _, value = item.partition("=")
+            edits[key] = _parse_value(value)
+        write_scene(argv[1], edits, argv[2])
+    elif len(argv) == 4 and argv[0] == "run":
+        name, scene, work = argv[1:]
+        out = os.path.join(work, name)
+        os.makedirs(out, exist_ok=True)
+        run = run_rve(scene, out)
+        with open(os.path.join(out, "status"), "w") as f:
+            f.write(run.status + "\n")
+        print(f"{name:<28} {run.wall:6.2f} s  {run.status}", flush=True)
+    else:
+        raise SystemExit(main.__doc__)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
