@@ -64,27 +64,28 @@ typedef struct {
     RvePointReport rep[NPOINT];
 } Out;
 
-static int checks = 0, failures = 0;
-
-static void check(int ok, const char *what, int inc, int point) {
-    checks++;
-    if (!ok) {
-        failures++;
-        fprintf(stderr, "share_batch: FAILED: %s (increment %d, point %d)\n", what, inc, point);
-    }
-}
-
-static int fail(const char *what, uint32_t st) {
-    char msg[512];
-    rve_last_error(msg, sizeof msg);
-    fprintf(stderr, "share_batch: %s: %s: %s\n", what, rve_status_message(st), msg);
-    return 1;
-}
-
 static double seconds(void) {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static int checks = 0, failures = 0;
+
+/* Counts a check; a failed one is said on stderr with where it failed. */
+static void check(int ok, const char *what, int inc, int point) {
+    checks++;
+    if (ok) return;
+    failures++;
+    fprintf(stderr, "share_batch: FAILED: %s (increment %d, point %d)\n", what, inc, point);
+}
+
+/* Says which call failed, with the library's status and message; returns 1. */
+static int fail(const char *what, uint32_t st) {
+    static char msg[512];
+    rve_last_error(msg, sizeof msg);
+    fprintf(stderr, "share_batch: %s: %s: %s\n", what, rve_status_message(st), msg);
+    return 1;
 }
 
 /* The path's position after increment i: up to past the peak, then partly back. */
