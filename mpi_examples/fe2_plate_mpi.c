@@ -11,7 +11,8 @@
  * concentrates the strain at the clamped corners: at 1.8e-4 the last increment of the
  * 16 x 8 plate localises there and the macro Newton no longer converges). Macro Newton with
  * the consistent tangent; an increment starts from the last converged field scaled to the
- * new U.
+ * new U. `-b NBACK` adds NBACK increments back down by the same step after the NINC up
+ * (unloading; an IMPL-EX scene unloads secantly), without step control or checkpoints.
  *
  * With an IMPL-EX scene (-s scenes/paper_rve_host_implex.toml: the paper's own ITZ law)
  * every RVE is linear within an increment with a symmetric positive definite tangent, so
@@ -72,8 +73,8 @@
  * residual.
  *
  * Usage: mpirun -n P fe2_plate_mpi [-s SCENE] [-o OUT.csv] [-x NX] [-y NY] [-n NINC]
- *                                  [-e EPSEND] [-t THREADS] [-S TOL] [-c DIR -k K | -r DIR]
- *                                  [-v 1]
+ *                                  [-e EPSEND] [-b NBACK] [-t THREADS] [-S TOL]
+ *                                  [-c DIR -k K | -r DIR] [-v 1]
  * Defaults: scenes/paper_rve_host.toml, fe2_plate_mpi.csv, 8 x 4, 8 increments, 1 thread.
  * Exit codes: 0 done, 1 a failed call or bad input (message on stderr), 2 no convergence.
  */
@@ -446,7 +447,7 @@ int main(int argc, char **argv) {
     const char *scene = "scenes/paper_rve_host.toml", *out = "fe2_plate_mpi.csv";
     const char *ckpt_dir = NULL, *restart_dir = NULL;
     int nx = 8, ny = 4, ninc = 8, stop_after = -1, verbose = 0, i, inc, inc0 = 0, s;
-    int follow, redos = 0, sharing = 0;
+    int follow, redos = 0, sharing = 0, nback = 0;
     double epsend = 1.6e-4, done = 0.0, length = 0.0, min_ratio = INFINITY, share_tol = 0.0;
     size_t nthreads = 1;
     Mesh m;
@@ -469,6 +470,7 @@ int main(int argc, char **argv) {
         else if (!strcmp(o, "-x")) nx = atoi(v);
         else if (!strcmp(o, "-y")) ny = atoi(v);
         else if (!strcmp(o, "-n")) ninc = atoi(v);
+        else if (!strcmp(o, "-b")) nback = atoi(v);
         else if (!strcmp(o, "-e")) epsend = atof(v);
         else if (!strcmp(o, "-t")) nthreads = (size_t)atoi(v);
         else if (!strcmp(o, "-c")) ckpt_dir = v;
@@ -480,9 +482,12 @@ int main(int argc, char **argv) {
     }
     if (i != argc) fail("option %s needs a value", argv[argc - 1]);
     if (nx < 1 || ny < 1 || ninc < 1 || nthreads < 1) fail("-x, -y, -n, -t must be >= 1%s", "");
+    if (nback < 0 || nback > ninc) fail("-b NBACK: 0 <= NBACK <= NINC%s", "");
     if ((ckpt_dir != NULL) != (stop_after >= 1) || stop_after > ninc)
         fail("-c DIR and -k K (1 <= K <= NINC) go together%s", "");
     follow = follows_ratio(scene);
+    if (nback && (follow || ckpt_dir || restart_dir))
+        fail("-b: no unloading with step control (%s) or checkpoints", scene);
     if (follow && (ckpt_dir || restart_dir))
         fail("-c/-r: a run that follows the step ratio (%s sets solver.step_tolerance) cannot "
              "be checkpointed", scene);
@@ -526,8 +531,9 @@ int main(int argc, char **argv) {
 
     inc = inc0; /* kept increments */
     s = inc0 + 1; /* the nominal step */
-    while (s <= ninc) {
-        double target = epsend * LX * s / ninc, nominal = epsend * LX / ninc;
+    while (s <= ninc + nback) {
+        double target = epsend * LX * (s <= ninc ? s : 2 * ninc - s) / ninc;
+        double nominal = epsend * LX / ninc;
         double U = target, r_prev = HUGE_VAL, reaction = 0.0, r = 0.0, ratio = 1.0;
         int it, converged = 0, n, last;
         if (follow && length > 0.0 && target - done > length * (1 + 1e-9)) U = done + length;
@@ -535,7 +541,7 @@ int main(int argc, char **argv) {
         memcpy(u_save, u, sizeof(double) * (size_t)m.ndof);
         /* Predictor: the last converged field scaled to the new U (linear at the start). */
         for (n = 0; n < m.nnode; n++) {
-            double scale = follow ? U / done : (double)inc / (inc - 1);
+            double scale = follow || s > ninc ? U / done : (double)inc / (inc - 1);
             if (inc == 1) {
                 u[2 * n] = U * m.x[n] / LX;
                 u[2 * n + 1] = 0.0;
@@ -639,7 +645,7 @@ int main(int argc, char **argv) {
             }
             length = next_length(length, taken, ratio, U == target);
         }
-        last = U == target && s == ninc;
+        last = U == target && s == ninc + nback;
         done = U;
         if (U == target) s++;
         for (i = 0; i < count; i++) {
