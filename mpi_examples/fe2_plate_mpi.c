@@ -41,7 +41,11 @@
  * ranks for it. The answers then depend on the rank count (which points meet in a batch)
  * but not on the threads per rank. stdout: each increment's solved and shared point
  * updates (from RvePointReport.shared_from, summed over the increment's Newton
- * iterations), in total and per rank, and the per-rank table's `shared` column.
+ * iterations), in total and per rank, the residual the increment ended at, and the
+ * per-rank table's `shared` column. A shared answer jumps (by up to about TOL of the
+ * stress) when a point changes anchor or gets its own solve back between two Newton
+ * iterations, so the macro residual can stall above FLOOR: with -S a stalled residual
+ * (not halved by an iteration) below TOL / 10 counts as converged.
  *
  * Parallel layout (what a cluster host does):
  *   - rank r owns the points [r N / P, (r + 1) N / P) and their RVE instances, created on
@@ -294,16 +298,16 @@ static void make_instances(const char *scene, int sharing, double tol, RveHandle
 }
 
 /* Prints (rank 0) this increment's solved and shared updates, in total and per rank, and
- * starts the next increment's counts. */
-static void print_sharing(int inc) {
+ * its final residual (rank 0's), and starts the next increment's counts. */
+static void print_sharing(int inc, double residual) {
     long mine[2] = {inc_solved, inc_shared}, *every = NULL, sum[2] = {0, 0};
     int r;
     if (rank == 0) every = xmalloc(sizeof(long) * 2 * (size_t)nranks);
     MPI_Gather(mine, 2, MPI_LONG, every, 2, MPI_LONG, 0, MPI_COMM_WORLD);
     if (rank == 0) {
         for (r = 0; r < nranks; r++) sum[0] += every[2 * r], sum[1] += every[2 * r + 1];
-        printf("sharing: increment %d: solved %ld, shared %ld; per rank (solved/shared):", inc,
-               sum[0], sum[1]);
+        printf("sharing: increment %d (residual %.1e): solved %ld, shared %ld; per rank "
+               "(solved/shared):", inc, residual, sum[0], sum[1]);
         for (r = 0; r < nranks; r++) printf(" %ld/%ld", every[2 * r], every[2 * r + 1]);
         printf("\n");
         free(every);
@@ -449,6 +453,7 @@ int main(int argc, char **argv) {
     int nx = 8, ny = 4, ninc = 8, stop_after = -1, verbose = 0, i, inc, inc0 = 0, s;
     int follow, redos = 0, sharing = 0, nback = 0;
     double epsend = 1.6e-4, done = 0.0, length = 0.0, min_ratio = INFINITY, share_tol = 0.0;
+    double stall; /* a residual that stops halving below this counts as converged */
     size_t nthreads = 1;
     Mesh m;
     int first, count, *counts, *displs;
@@ -485,6 +490,7 @@ int main(int argc, char **argv) {
     if (nback < 0 || nback > ninc) fail("-b NBACK: 0 <= NBACK <= NINC%s", "");
     if ((ckpt_dir != NULL) != (stop_after >= 1) || stop_after > ninc)
         fail("-c DIR and -k K (1 <= K <= NINC) go together%s", "");
+    stall = sharing ? fmax(FLOOR, 0.1 * share_tol) : FLOOR;
     follow = follows_ratio(scene);
     if (nback && (follow || ckpt_dir || restart_dir))
         fail("-b: no unloading with step control (%s) or checkpoints", scene);
@@ -611,7 +617,7 @@ int main(int argc, char **argv) {
                 }
                 r = sqrt(rn) / fabs(reaction);
                 if (verbose) printf("increment %d  it %d  residual %.3e\n", inc, it, r);
-                converged = r < TOL || (it > 0 && r <= FLOOR && r >= 0.5 * r_prev);
+                converged = r < TOL || (it > 0 && r <= stall && r >= 0.5 * r_prev);
                 if (!converged && it < MAXIT) {
                     if (band_solve(band, m.ndof, bw, du))
                         fail("increment %s: singular macro stiffness", "");
@@ -654,7 +660,7 @@ int main(int argc, char **argv) {
         }
         if (rank == 0) fprintf(csv, "%d,%.17g,%.17g,%d,%.17g\n", inc, U, reaction, it, r);
         shared += inc_shared;
-        if (sharing) print_sharing(inc);
+        if (sharing) print_sharing(inc, r);
         if (last && rank == 0) {
             int e;
             fprintf(csv, "point,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy\n");
