@@ -25,8 +25,12 @@
  * Prints each increment's solved and shared counts (from shared_from), the totals, the
  * largest difference, and the wall time of each set's calls.
  *
- * Usage: share_batch [SCENE.toml [TOL]]   (default TOL 0.02). Exit 0 when every check
- * passed.
+ * With OUT.csv, the sharing run's every increment and point (material, shared_from,
+ * strain, stress; 17 digits) for tests/c_driver.rs, which replays it through the Rust
+ * batch.
+ *
+ * Usage: share_batch [SCENE.toml [TOL [OUT.csv]]]   (default TOL 0.02). Exit 0 when every
+ * check passed.
  */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
@@ -226,7 +230,16 @@ static int check_increment(Out o[NSET], int i, double *largest, double *diff) {
     return shared;
 }
 
-static int run(RveHandle h[NSET][NPOINT], double tol) {
+/* The sharing run's increment i (on 1 thread) as CSV lines. */
+static void write_rows(FILE *csv, int i, double eps[NPOINT][3], const Out *on) {
+    int p;
+    for (p = 0; p < NPOINT; p++)
+        fprintf(csv, "%d,%d,%d,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", i + 1, p, MATERIAL[p],
+                (unsigned)on->rep[p].shared_from, eps[p][0], eps[p][1], eps[p][2], on->sig[p][0],
+                on->sig[p][1], on->sig[p][2]);
+}
+
+static int run(RveHandle h[NSET][NPOINT], double tol, FILE *csv) {
     static Out o[NSET];
     double eps[NPOINT][3], largest = 0.0, diff = 0.0, elapsed[NSET] = {0.0};
     int i, p, b, total = 0;
@@ -240,6 +253,7 @@ static int run(RveHandle h[NSET][NPOINT], double tol) {
             if (update(b, h[b], eps, &o[b], &elapsed[b])) return 1;
         shared = check_increment(o, i, &largest, &diff);
         total += shared;
+        if (csv) write_rows(csv, i, eps, &o[ON1]);
         printf("%9d  %12.4e  %6d  %6d\n", i + 1, 1.6e-5 * along(i), NPOINT - shared, shared);
         for (b = 0; b < NSET; b++)
             for (p = 0; p < NPOINT; p++)
@@ -256,7 +270,9 @@ static int run(RveHandle h[NSET][NPOINT], double tol) {
 int main(int argc, char **argv) {
     const char *scene = argc > 1 ? argv[1] : "scenes/paper_rve_host_implex.toml";
     double tol = argc > 2 ? atof(argv[2]) : 0.02;
+    const char *csv_path = argc > 3 ? argv[3] : NULL;
     char dir[4096], *slash;
+    FILE *csv = NULL;
     RveHandle h[NSET][NPOINT];
     int b, p, status;
     memset(h, 0, sizeof h);
@@ -264,7 +280,17 @@ int main(int argc, char **argv) {
     slash = strrchr(dir, '/');
     if (slash) *slash = '\0';
     else snprintf(dir, sizeof dir, ".");
-    status = make_instances(scene, dir, tol, h) || run(h, tol);
+    if (csv_path) {
+        if (!(csv = fopen(csv_path, "w")))
+            return fprintf(stderr, "share_batch: cannot write %s\n", csv_path), 1;
+        fprintf(csv, "increment,point,material,shared_from,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,"
+                     "sig_xy\n");
+    }
+    status = make_instances(scene, dir, tol, h) || run(h, tol, csv);
+    if (csv && fclose(csv) != 0) {
+        fprintf(stderr, "share_batch: cannot write %s\n", csv_path);
+        status = 1;
+    }
     for (b = 0; b < NSET; b++)
         for (p = 0; p < NPOINT; p++) rve_free(h[b][p]);
     printf("share_batch: %d increments of %d points, %d checks, %d failed\n", NINC, NPOINT, checks,
