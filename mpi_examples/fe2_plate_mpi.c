@@ -11,7 +11,8 @@
  * concentrates the strain at the clamped corners: at 1.8e-4 the last increment of the
  * 16 x 8 plate localises there and the macro Newton no longer converges). Macro Newton with
  * the consistent tangent; an increment starts from the last converged field scaled to the
- * new U.
+ * new U. `-b NBACK` adds NBACK increments back down by the same step after the NINC up
+ * (unloading; an IMPL-EX scene unloads secantly), without step control or checkpoints.
  *
  * With an IMPL-EX scene (-s scenes/paper_rve_host_implex.toml: the paper's own ITZ law)
  * every RVE is linear within an increment with a symmetric positive definite tangent, so
@@ -31,6 +32,20 @@
  * largest). Each update then passes its increment's dU as its time increment. The
  * increments are numbered as kept; stdout says how many were redone. Checkpoints (-c,
  * -r) are refused with such a scene (the checkpoint holds no step length).
+ *
+ * Answer sharing (-S TOL): the rank's instances are made from the scene with
+ * `share_tolerance = TOL` added to its [solver] table (rve_init_text), so within each
+ * batch call a point close to a point of the same rank already solved takes that point's
+ * answer corrected to first order (docs/sharing.md). Sharing stays within a rank (a
+ * batch holds one rank's points only); the points' states and strains never cross
+ * ranks for it. The answers then depend on the rank count (which points meet in a batch)
+ * but not on the threads per rank. stdout: each increment's solved and shared point
+ * updates (from RvePointReport.shared_from, summed over the increment's Newton
+ * iterations), in total and per rank, the residual the increment ended at, and the
+ * per-rank table's `shared` column. A shared answer jumps (by up to about TOL of the
+ * stress) when a point changes anchor or gets its own solve back between two Newton
+ * iterations, so the macro residual can stall above FLOOR: with -S a stalled residual
+ * (not halved by an iteration) below TOL / 10 counts as converged.
  *
  * Parallel layout (what a cluster host does):
  *   - rank r owns the points [r N / P, (r + 1) N / P) and their RVE instances, created on
@@ -56,12 +71,14 @@
  * residual), then after the last increment one line per point (strain, stress), all with
  * 17 significant digits; a restart appends to it. stdout: per rank, the wall time, the
  * time spent in the RVE calls, the CPU time and the peak RSS (getrusage: ru_utime +
- * ru_stime, ru_maxrss), the instance updates and how many of them were answered without a
- * solve (rve_fast_updates, since the instances were created or loaded); with -v 1 also
- * each macro iteration's residual.
+ * ru_stime, ru_maxrss), the instance updates, how many of them were answered without a
+ * solve (rve_fast_updates, since the instances were created or loaded) and how many took
+ * another point's answer (shared_from, -S); with -v 1 also each macro iteration's
+ * residual.
  *
  * Usage: mpirun -n P fe2_plate_mpi [-s SCENE] [-o OUT.csv] [-x NX] [-y NY] [-n NINC]
- *                                  [-e EPSEND] [-t THREADS] [-c DIR -k K | -r DIR] [-v 1]
+ *                                  [-e EPSEND] [-b NBACK] [-t THREADS] [-S TOL]
+ *                                  [-c DIR -k K | -r DIR] [-v 1]
  * Defaults: scenes/paper_rve_host.toml, fe2_plate_mpi.csv, 8 x 4, 8 increments, 1 thread.
  * Exit codes: 0 done, 1 a failed call or bad input (message on stderr), 2 no convergence.
  */
@@ -92,6 +109,8 @@ typedef struct {
 } Mesh;
 
 static int rank, nranks;
+/* This rank's point updates of the current increment: solved, and shared (-S). */
+static long inc_solved, inc_shared;
 
 static void die(const char *what, uint32_t st) {
     char msg[512];
@@ -228,6 +247,74 @@ static int follows_ratio(const char *scene) {
     return found;
 }
 
+/* The scene file's text with `share_tolerance = tol` after its [solver] line (malloc'd). */
+static char *scene_sharing(const char *scene, double tol) {
+    char line[512];
+    size_t len = 0, cap = 4096;
+    char *text = xmalloc(cap);
+    int added = 0;
+    FILE *f = fopen(scene, "r");
+    if (!f) fail("cannot read %s", scene);
+    text[0] = '\0';
+    while (fgets(line, sizeof line, f)) {
+        size_t n = strlen(line);
+        while (len + n + 64 >= cap) {
+            char *grown = realloc(text, cap *= 2);
+            if (!grown) fail("out of memory%s", "");
+            text = grown;
+        }
+        memcpy(text + len, line, n + 1);
+        len += n;
+        if (!added && strncmp(line, "[solver]", 8) == 0) {
+            len += (size_t)sprintf(text + len, "share_tolerance = %.17g\n", tol);
+            added = 1;
+        }
+    }
+    fclose(f);
+    if (!added) fail("-S: %s has no [solver] table", scene);
+    return text;
+}
+
+/* This rank's instances: the first from the scene (with the sharing key when `sharing`;
+ * the library checks the value; relative paths against the scene's directory), the
+ * others share its model. */
+static void make_instances(const char *scene, int sharing, double tol, RveHandle *h,
+                           int count) {
+    int i;
+    for (i = 0; i < count; i++) {
+        uint32_t st;
+        if (i > 0) st = rve_clone_model(h[0], &h[i]);
+        else if (!sharing) st = rve_init_file(scene, &h[0]);
+        else {
+            char dir[4096], *slash, *text = scene_sharing(scene, tol);
+            snprintf(dir, sizeof dir, "%s", scene);
+            slash = strrchr(dir, '/');
+            if (slash) *slash = '\0';
+            st = rve_init_text(text, slash ? dir : NULL, &h[0]);
+            free(text);
+        }
+        if (st != RVE_STATUS_OK) die(i ? "rve_clone_model" : "rve_init_file/text", st);
+    }
+}
+
+/* Prints (rank 0) this increment's solved and shared updates, in total and per rank, and
+ * its final residual (rank 0's), and starts the next increment's counts. */
+static void print_sharing(int inc, double residual) {
+    long mine[2] = {inc_solved, inc_shared}, *every = NULL, sum[2] = {0, 0};
+    int r;
+    if (rank == 0) every = xmalloc(sizeof(long) * 2 * (size_t)nranks);
+    MPI_Gather(mine, 2, MPI_LONG, every, 2, MPI_LONG, 0, MPI_COMM_WORLD);
+    if (rank == 0) {
+        for (r = 0; r < nranks; r++) sum[0] += every[2 * r], sum[1] += every[2 * r + 1];
+        printf("sharing: increment %d (residual %.1e): solved %ld, shared %ld; per rank "
+               "(solved/shared):", inc, residual, sum[0], sum[1]);
+        for (r = 0; r < nranks; r++) printf(" %ld/%ld", every[2 * r], every[2 * r + 1]);
+        printf("\n");
+        free(every);
+    }
+    inc_solved = inc_shared = 0;
+}
+
 /* Trial-updates this rank's points over the time increment dtime (rve_update_batch_timed);
  * aborts every rank on a failure. Returns the smallest suggested_step_ratio of all points
  * of all ranks (MPI_MIN) when `reduce`, else 1. */
@@ -249,6 +336,10 @@ static double update_points(const RveHandle *h, int count, const double *eps, do
     }
     MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (anybad) MPI_Abort(MPI_COMM_WORLD, 1);
+    for (e = 0; e < count; e++) {
+        if (reports[e].shared_from) inc_shared++;
+        else inc_solved++;
+    }
     if (!reduce) return 1.0;
     for (e = 0; e < count; e++) mine = fmin(mine, reports[e].suggested_step_ratio);
     MPI_Allreduce(&mine, &all, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
@@ -360,15 +451,16 @@ int main(int argc, char **argv) {
     const char *scene = "scenes/paper_rve_host.toml", *out = "fe2_plate_mpi.csv";
     const char *ckpt_dir = NULL, *restart_dir = NULL;
     int nx = 8, ny = 4, ninc = 8, stop_after = -1, verbose = 0, i, inc, inc0 = 0, s;
-    int follow, redos = 0;
-    double epsend = 1.6e-4, done = 0.0, length = 0.0, min_ratio = INFINITY;
+    int follow, redos = 0, sharing = 0, nback = 0;
+    double epsend = 1.6e-4, done = 0.0, length = 0.0, min_ratio = INFINITY, share_tol = 0.0;
+    double stall; /* a residual that stops halving below this counts as converged */
     size_t nthreads = 1;
     Mesh m;
     int first, count, *counts, *displs;
     RveHandle *h;
     double *u, *du, *u_save, *eps, *sig_tan, *all = NULL, *band = NULL, *res = NULL;
     double t_start, t_rve = 0.0, t_init;
-    long updates = 0; /* this rank's instance updates */
+    long updates = 0, shared = 0; /* this rank's instance updates, and shared ones */
     RvePointReport *reports;
     FILE *csv = NULL;
 
@@ -383,19 +475,25 @@ int main(int argc, char **argv) {
         else if (!strcmp(o, "-x")) nx = atoi(v);
         else if (!strcmp(o, "-y")) ny = atoi(v);
         else if (!strcmp(o, "-n")) ninc = atoi(v);
+        else if (!strcmp(o, "-b")) nback = atoi(v);
         else if (!strcmp(o, "-e")) epsend = atof(v);
         else if (!strcmp(o, "-t")) nthreads = (size_t)atoi(v);
         else if (!strcmp(o, "-c")) ckpt_dir = v;
         else if (!strcmp(o, "-k")) stop_after = atoi(v);
         else if (!strcmp(o, "-r")) restart_dir = v;
         else if (!strcmp(o, "-v")) verbose = atoi(v);
+        else if (!strcmp(o, "-S")) share_tol = atof(v), sharing = 1;
         else fail("unknown option %s", o);
     }
     if (i != argc) fail("option %s needs a value", argv[argc - 1]);
     if (nx < 1 || ny < 1 || ninc < 1 || nthreads < 1) fail("-x, -y, -n, -t must be >= 1%s", "");
+    if (nback < 0 || nback > ninc) fail("-b NBACK: 0 <= NBACK <= NINC%s", "");
     if ((ckpt_dir != NULL) != (stop_after >= 1) || stop_after > ninc)
         fail("-c DIR and -k K (1 <= K <= NINC) go together%s", "");
+    stall = sharing ? fmax(FLOOR, 0.1 * share_tol) : FLOOR;
     follow = follows_ratio(scene);
+    if (nback && (follow || ckpt_dir || restart_dir))
+        fail("-b: no unloading with step control (%s) or checkpoints", scene);
     if (follow && (ckpt_dir || restart_dir))
         fail("-c/-r: a run that follows the step ratio (%s sets solver.step_tolerance) cannot "
              "be checkpointed", scene);
@@ -415,10 +513,7 @@ int main(int argc, char **argv) {
 
     /* This rank's instances: the first is meshed from the scene, the others share it. */
     h = xmalloc(sizeof(RveHandle) * (size_t)count);
-    for (i = 0; i < count; i++) {
-        uint32_t st = i == 0 ? rve_init_file(scene, &h[0]) : rve_clone_model(h[0], &h[i]);
-        if (st != RVE_STATUS_OK) die(i == 0 ? "rve_init_file" : "rve_clone_model", st);
-    }
+    make_instances(scene, sharing, share_tol, h, count);
     t_init = now() - t_start;
 
     u = xmalloc(sizeof(double) * (size_t)m.ndof);
@@ -442,8 +537,9 @@ int main(int argc, char **argv) {
 
     inc = inc0; /* kept increments */
     s = inc0 + 1; /* the nominal step */
-    while (s <= ninc) {
-        double target = epsend * LX * s / ninc, nominal = epsend * LX / ninc;
+    while (s <= ninc + nback) {
+        double target = epsend * LX * (s <= ninc ? s : 2 * ninc - s) / ninc;
+        double nominal = epsend * LX / ninc;
         double U = target, r_prev = HUGE_VAL, reaction = 0.0, r = 0.0, ratio = 1.0;
         int it, converged = 0, n, last;
         if (follow && length > 0.0 && target - done > length * (1 + 1e-9)) U = done + length;
@@ -451,7 +547,7 @@ int main(int argc, char **argv) {
         memcpy(u_save, u, sizeof(double) * (size_t)m.ndof);
         /* Predictor: the last converged field scaled to the new U (linear at the start). */
         for (n = 0; n < m.nnode; n++) {
-            double scale = follow ? U / done : (double)inc / (inc - 1);
+            double scale = follow || s > ninc ? U / done : (double)inc / (inc - 1);
             if (inc == 1) {
                 u[2 * n] = U * m.x[n] / LX;
                 u[2 * n + 1] = 0.0;
@@ -521,7 +617,7 @@ int main(int argc, char **argv) {
                 }
                 r = sqrt(rn) / fabs(reaction);
                 if (verbose) printf("increment %d  it %d  residual %.3e\n", inc, it, r);
-                converged = r < TOL || (it > 0 && r <= FLOOR && r >= 0.5 * r_prev);
+                converged = r < TOL || (it > 0 && r <= stall && r >= 0.5 * r_prev);
                 if (!converged && it < MAXIT) {
                     if (band_solve(band, m.ndof, bw, du))
                         fail("increment %s: singular macro stiffness", "");
@@ -550,11 +646,12 @@ int main(int argc, char **argv) {
                 length = fmax(taken * ratio, nominal / 1024.0);
                 redos++;
                 inc--;
+                inc_solved = inc_shared = 0;
                 continue;
             }
             length = next_length(length, taken, ratio, U == target);
         }
-        last = U == target && s == ninc;
+        last = U == target && s == ninc + nback;
         done = U;
         if (U == target) s++;
         for (i = 0; i < count; i++) {
@@ -562,6 +659,8 @@ int main(int argc, char **argv) {
             if (st != RVE_STATUS_OK) die("rve_commit", st);
         }
         if (rank == 0) fprintf(csv, "%d,%.17g,%.17g,%d,%.17g\n", inc, U, reaction, it, r);
+        shared += inc_shared;
+        if (sharing) print_sharing(inc, r);
         if (last && rank == 0) {
             int e;
             fprintf(csv, "point,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy\n");
@@ -583,7 +682,7 @@ int main(int argc, char **argv) {
     /* Per-rank figures, printed by rank 0 in rank order. */
     {
         struct rusage ru;
-        double mine[7], *every = rank == 0 ? xmalloc(sizeof(double) * 7 * (size_t)nranks) : NULL;
+        double mine[8], *every = rank == 0 ? xmalloc(sizeof(double) * 8 * (size_t)nranks) : NULL;
         getrusage(RUSAGE_SELF, &ru);
         mine[0] = now() - t_start;
         mine[1] = t_init;
@@ -593,18 +692,21 @@ int main(int argc, char **argv) {
         mine[4] = (double)ru.ru_maxrss / 1024.0; /* Linux: KiB */
         mine[5] = (double)updates;
         mine[6] = (double)fast_updates(h, count);
-        MPI_Gather(mine, 7, MPI_DOUBLE, every, 7, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        mine[7] = (double)shared;
+        MPI_Gather(mine, 8, MPI_DOUBLE, every, 8, MPI_DOUBLE, 0, MPI_COMM_WORLD);
         if (rank == 0) {
             printf("ranks %d, points %d, increments %d..%d, threads per rank %zu\n", nranks,
                    m.nelem, inc0 + 1, stop_after > 0 ? stop_after : inc, nthreads);
             if (follow)
                 printf("step control: %d increments kept, %d redone smaller, smallest ratio "
                        "%.4g\n", inc, redos, min_ratio);
-            printf("rank  points  wall_s  init_s  rve_s   cpu_s  peak_rss_MiB  updates  fast\n");
+            printf("rank  points  wall_s  init_s  rve_s   cpu_s  peak_rss_MiB  updates  fast  "
+                   "shared\n");
             for (i = 0; i < nranks; i++)
-                printf("%4d  %6d  %6.2f  %6.2f  %5.2f  %6.2f  %12.1f  %7.0f  %4.0f\n", i,
-                       counts[i] / 12, every[7 * i], every[7 * i + 1], every[7 * i + 2],
-                       every[7 * i + 3], every[7 * i + 4], every[7 * i + 5], every[7 * i + 6]);
+                printf("%4d  %6d  %6.2f  %6.2f  %5.2f  %6.2f  %12.1f  %7.0f  %4.0f  %6.0f\n", i,
+                       counts[i] / 12, every[8 * i], every[8 * i + 1], every[8 * i + 2],
+                       every[8 * i + 3], every[8 * i + 4], every[8 * i + 5], every[8 * i + 6],
+                       every[8 * i + 7]);
             free(every);
         }
     }

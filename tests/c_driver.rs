@@ -2,6 +2,8 @@
 //! follow the paper's section 5.2.2 cycle; every shared value must agree to the last bit.
 //! c_examples/implex_time.c's IMPL-EX path with non-uniform time increments through
 //! `rve_update_timed` equals `Instance::update_timed` to the last bit.
+//! c_examples/share_batch.c's batch with answer sharing through `rve_update_batch_timed`
+//! equals `update_batch` on the same points to the last bit, `shared_from` included.
 
 mod common;
 
@@ -10,7 +12,7 @@ use std::process::Command;
 use std::sync::{Arc, Once};
 
 use rve::solver::TangentRequest;
-use rve::{Instance, Model};
+use rve::{Instance, Model, Scene};
 
 /// Builds the shared library from these sources and the C examples against it, once per
 /// test binary (`cargo test` builds the rlib, not the cdylib the examples link: the
@@ -145,4 +147,66 @@ fn implex_time_through_c_is_bit_identical_to_instance_update_timed() {
             k + 1
         );
     }
+}
+
+/// The IMPL-EX host scene with `share_tolerance` and `sigma_c` set, as share_batch.c
+/// makes its two materials.
+fn sharing_model(tol: &str, sigma_c: &str) -> Arc<Model> {
+    let text = std::fs::read_to_string(common::repo("scenes/paper_rve_host_implex.toml"))
+        .unwrap()
+        .replace(
+            "[solver]\n",
+            &format!("[solver]\nshare_tolerance = {tol}\n"),
+        )
+        .replace("sigma_c = 4.0", &format!("sigma_c = {sigma_c}"));
+    let scene = Scene::from_toml_str(&text, common::repo("scenes")).unwrap();
+    Arc::new(Model::from_scene(&scene).unwrap())
+}
+
+#[test]
+fn share_batch_through_c_is_bit_identical_to_update_batch() {
+    build_examples();
+    let csv = std::env::temp_dir().join(format!("mesorve-share-batch-{}.csv", std::process::id()));
+    // The program's own checks (sharing off = the exact path, 1 = 2 threads, within the
+    // tolerance) must pass too.
+    let st = Command::new(common::repo("target/c_examples/bin/share_batch"))
+        .arg(common::repo("scenes/paper_rve_host_implex.toml"))
+        .arg("0.02")
+        .arg(&csv)
+        .status()
+        .unwrap();
+    assert!(st.success(), "share_batch failed");
+    let (header, rows) = read_csv(&csv);
+    std::fs::remove_file(&csv).ok();
+    assert_eq!(header[3], "shared_from");
+    let models = [sharing_model("0.02", "4.0"), sharing_model("0.02", "4.5")];
+    let n = rows.iter().filter(|r| r[0] == 1.0).count();
+    assert_eq!((n, rows.len() % n), (32, 0));
+    let mut points: Vec<Instance> = rows[..n]
+        .iter()
+        .map(|r| Instance::new(models[r[2] as usize].clone()))
+        .collect();
+    let mut shared = 0;
+    for increment in rows.chunks(n) {
+        let strains: Vec<[f64; 3]> = increment.iter().map(|r| [r[4], r[5], r[6]]).collect();
+        let (stresses, reports) = common::batch_consistent(&mut points, &strains, 2);
+        points.iter_mut().for_each(|p| p.commit().unwrap());
+        for (k, r) in increment.iter().enumerate() {
+            let from = reports[k].shared_from.map_or(0.0, |j| (j + 1) as f64);
+            assert_eq!(from, r[3], "increment {}, point {k}: shared_from", r[0]);
+            shared += usize::from(from > 0.0);
+            for j in 0..3 {
+                assert_eq!(
+                    stresses[k][j].to_bits(),
+                    r[7 + j].to_bits(),
+                    "increment {}, point {k}, {}: update_batch {:e}, C {:e}",
+                    r[0],
+                    header[7 + j],
+                    stresses[k][j],
+                    r[7 + j]
+                );
+            }
+        }
+    }
+    assert!(shared > 0, "the C run shared nothing");
 }

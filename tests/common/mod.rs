@@ -27,6 +27,32 @@ pub fn paper_scene_with(replacements: &[(&str, &str)]) -> String {
     text
 }
 
+/// One `update_batch` of `points` at `strains` (`dtime` 1, the consistent tangent, on
+/// `threads`), every point succeeding: their stresses and reports.
+pub fn batch_consistent(
+    points: &mut [rve::Instance],
+    strains: &[[f64; 3]],
+    threads: usize,
+) -> (Vec<[f64; 3]>, Vec<rve::model::batch::PointReport>) {
+    use rve::model::batch::{update_batch, BatchOutputs, BatchStep, PointReport};
+    let n = points.len();
+    let (mut stresses, mut tangents) = (vec![[0.0; 3]; n], vec![[0.0; 9]; n]);
+    let mut reports = vec![PointReport::default(); n];
+    let step = BatchStep {
+        dtime: 1.0,
+        request: rve::TangentRequest::Consistent,
+        threads,
+    };
+    let out = BatchOutputs {
+        stresses: &mut stresses,
+        tangents: Some(&mut tangents),
+        reports: &mut reports,
+    };
+    let failures = update_batch(points, strains, step, out).unwrap();
+    assert!(failures.is_empty(), "{failures:?}");
+    (stresses, reports)
+}
+
 /// `max |a_i - b_i| / max |b_i|`: the relative difference of two stress or tangent arrays.
 pub fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
