@@ -535,6 +535,49 @@ impl Instance {
         Ok(())
     }
 
+    /// The IMPL-EX step the pending trial was answered on (`D_ex`, the jump operators
+    /// `A_q`, the frozen contact status: `crate::state::LinearBranch`), with the step ratio
+    /// `dt / dt_n` it was factorized for; `None` without a pending IMPL-EX trial that holds
+    /// one. What [`adopt_step`](Self::adopt_step) gives another instance.
+    pub fn implex_step(&self) -> Option<(&crate::state::LinearBranch, u64)> {
+        match (self.pending, &self.trial, self.implex_step) {
+            (Pending::Solved, Some(trial), Some(ratio)) if trial.linear.valid => {
+                Some((&trial.linear, ratio))
+            }
+            _ => None,
+        }
+    }
+
+    /// Takes `step`, an IMPL-EX step another instance factorized (its
+    /// [`implex_step`](Self::implex_step)) from a committed state close to this one's, as
+    /// the step of this instance's committed state for `dt`: the next
+    /// [`update_timed`](Self::update_timed) at `dt` answers on it without a factorization,
+    /// `sigma = D_ex eps`, and forms this instance's own trial history from the jumps
+    /// `A_q eps` and its own committed history (`crate::solver::implex::finish_step`). The
+    /// trial's fluctuation is not formed (outputs that need it refuse, as after any
+    /// reused step at another strain). `false` (nothing changes): not an IMPL-EX model,
+    /// no fast path, or a step of another ratio than `dt`'s from this committed state.
+    pub fn adopt_step(&mut self, step: &crate::state::LinearBranch, ratio: u64, dt: f64) -> bool {
+        let own = implex::step_ratio(self.committed.implex.step, dt).to_bits();
+        if self.model.solver.integration != Integration::Implex
+            || !self.model.solver.fast_path
+            || !step.valid
+            || own != ratio
+        {
+            return false;
+        }
+        self.revert();
+        let model = &self.model;
+        let trial = self
+            .trial
+            .get_or_insert_with(|| Box::new(model.new_state()));
+        trial.linear.clone_from(step);
+        // The unknowns are not the step's at any strain.
+        trial.linear.unknowns_strain = [f64::NAN; 3];
+        self.implex_step = Some(ratio);
+        true
+    }
+
     /// Whether the pending solved trial holds another contact status than the committed
     /// state at some ITZ point (held points, or IMPL-EX's closed points); false without
     /// one, and for a fast trial (same status by construction).
