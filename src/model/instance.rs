@@ -674,4 +674,42 @@ mod tests {
             }
         }
     }
+
+    /// An IMPL-EX instance that adopts another's step, factorized from the same committed
+    /// state, answers and writes its trial bit for bit as if it had factorized the step
+    /// itself, without a factorization; a step of another ratio is refused.
+    #[test]
+    fn an_adopted_implex_step_answers_as_the_own_one() {
+        let text = DEFAULT_SCENE_TOML.replace("[solver]\n", "[solver]\nintegration = \"implex\"\n");
+        let model = cache::model_for_text(&text, None).unwrap();
+        let mut ws = model.workspace();
+        let consistent = TangentRequest::Consistent;
+        let (mut anchor, mut own) = (Instance::new(model.clone()), Instance::new(model.clone()));
+        let mut follower = Instance::new(model.clone());
+        for k in 1..=6 {
+            let strain = |x: f64| [x * 4e-5 * k as f64, -1e-5 * k as f64, 2e-5];
+            anchor
+                .update_timed(strain(0.9), 1.0, &mut ws, consistent)
+                .unwrap();
+            let (step, ratio) = anchor.implex_step().unwrap();
+            assert!(!follower.adopt_step(step, ratio ^ 1, 1.0));
+            assert!(follower.adopt_step(step, ratio, 1.0));
+            let r = follower
+                .update_timed(strain(1.0), 1.0, &mut ws, consistent)
+                .unwrap();
+            let e = own
+                .update_timed(strain(1.0), 1.0, &mut ws, consistent)
+                .unwrap();
+            assert_eq!(r.report.factorizations, 0, "increment {k}");
+            assert_eq!(e.report.factorizations, 1, "increment {k}");
+            assert_eq!(r.stress.map(f64::to_bits), e.stress.map(f64::to_bits));
+            assert_eq!(r.tangent.map(f64::to_bits), e.tangent.map(f64::to_bits));
+            assert_eq!(follower.trial_core().unwrap(), own.trial_core().unwrap());
+            let core = own.trial_core().unwrap();
+            for inst in [&mut anchor, &mut own, &mut follower] {
+                inst.load_core(Some(&core), &mut ws).unwrap();
+            }
+        }
+        assert!(own.committed().history.iter().any(|&h| h > 0.0));
+    }
 }
