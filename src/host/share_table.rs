@@ -10,11 +10,13 @@
 //! increment the host called first, which with several threads changes from run to run
 //! (docs/sharing.md bounds the difference on the member).
 
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::model::share::{self, Indicator};
 use crate::model::{Model, Response};
 use crate::state::statev::Core;
+use crate::state::LinearBranch;
 
 /// The increment a table belongs to: the bits of `TIME(2)` and `DTIME`, and `KSTEP`.
 pub(super) type IncrementKey = (u64, u64, i32);
@@ -29,12 +31,94 @@ pub(super) struct Anchor {
     pub trial: Core,
 }
 
+/// An IMPL-EX step factorized in the increment (step sharing): the committed core it was
+/// factorized from and the step (`Instance::implex_step`).
+pub(super) struct Step {
+    pub committed: Core,
+    pub step: LinearBranch,
+    /// The step ratio `dt / dt_n` (bits) it was factorized for.
+    pub ratio: u64,
+    /// `|h|_inf` of the committed history: a first filter of the candidates.
+    norm: f64,
+}
+
+impl Step {
+    pub fn new(committed: Core, step: LinearBranch, ratio: u64) -> Self {
+        let norm = committed.history.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        Step {
+            committed,
+            step,
+            ratio,
+            norm,
+        }
+    }
+}
+
+/// The key of a core's discrete part (contact status, `at_start`, `dt_n`): the steps of
+/// one key are the candidates of a core of that key.
+fn status_key(core: &Core) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    core.closed.hash(&mut h);
+    core.at_start.hash(&mut h);
+    core.step.to_bits().hash(&mut h);
+    h.finish()
+}
+
+/// The key of a whole core bit for bit (the point's own earlier calls of the increment).
+fn core_key(core: &Core) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    status_key(core).hash(&mut h);
+    core.strain.map(f64::to_bits).hash(&mut h);
+    for v in core.history.iter().chain(&core.previous) {
+        v.to_bits().hash(&mut h);
+    }
+    h.finish()
+}
+
 struct Increment {
     model: Arc<Model>,
     key: IncrementKey,
     anchors: Vec<Anchor>,
+    /// IMPL-EX steps by [`core_key`] and by [`status_key`].
+    exact: HashMap<u64, Arc<Step>>,
+    steps: HashMap<u64, Vec<Arc<Step>>>,
     solved: u64,
     shared: u64,
+}
+
+impl Increment {
+    fn new(model: &Arc<Model>, key: IncrementKey) -> Self {
+        Increment {
+            model: model.clone(),
+            key,
+            anchors: Vec::new(),
+            exact: HashMap::new(),
+            steps: HashMap::new(),
+            solved: 0,
+            shared: 0,
+        }
+    }
+
+    /// The step of the same committed core, else the first whose core is within `tol`
+    /// ([`share::cores_close`]), of step ratio `ratio`.
+    fn find_step(&self, tol: f64, core: &Core, ratio: u64) -> Option<Arc<Step>> {
+        let same = |s: &&Arc<Step>| s.ratio == ratio && s.committed == *core;
+        if let Some(s) = self.exact.get(&core_key(core)).filter(same) {
+            return Some(s.clone());
+        }
+        let norm = core.history.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let candidates = self.steps.get(&status_key(core))?;
+        candidates
+            .iter()
+            .find(|s| {
+                s.ratio == ratio
+                    && (norm - s.norm).abs() <= tol * s.norm.max(share::H_FLOOR)
+                    && share::cores_close(tol, core, &s.committed)
+            })
+            .cloned()
+    }
 }
 
 /// The tables of a UMAT, one per material, each of its current increment.
@@ -73,26 +157,14 @@ impl ShareTable {
         let i = match all.iter().position(|t| share::same_model(&t.model, model)) {
             Some(i) => i,
             None => {
-                all.push(Increment {
-                    model: model.clone(),
-                    key,
-                    anchors: Vec::new(),
-                    solved: 0,
-                    shared: 0,
-                });
+                all.push(Increment::new(model, key));
                 all.len() - 1
             }
         };
         let inc = &mut all[i];
         if inc.key != key {
             log(inc);
-            *inc = Increment {
-                model: model.clone(),
-                key,
-                anchors: Vec::new(),
-                solved: 0,
-                shared: 0,
-            };
+            *inc = Increment::new(model, key);
         }
         f(inc)
     }
@@ -145,6 +217,38 @@ impl ShareTable {
         self.with(model, key, |inc| {
             inc.solved += 1;
             inc.anchors.push(anchor);
+        });
+    }
+
+    /// IMPL-EX step sharing: the step factorized in this increment from the committed core
+    /// `core` (bit for bit), else from a core within `tol` of it, for step ratio `ratio`
+    /// (`None`: the point factorizes its own). Counts a shared call when found.
+    pub fn follow_step(
+        &self,
+        model: &Arc<Model>,
+        key: IncrementKey,
+        tol: f64,
+        (core, ratio): (&Core, u64),
+    ) -> Option<Arc<Step>> {
+        self.with(model, key, |inc| {
+            let found = inc.find_step(tol, core, ratio)?;
+            inc.shared += 1;
+            Some(found)
+        })
+    }
+
+    /// Records a step factorized in the increment (a solved call).
+    pub fn insert_step(&self, model: &Arc<Model>, key: IncrementKey, step: Step) {
+        let step = Arc::new(step);
+        self.with(model, key, |inc| {
+            inc.solved += 1;
+            inc.exact
+                .entry(core_key(&step.committed))
+                .or_insert_with(|| step.clone());
+            inc.steps
+                .entry(status_key(&step.committed))
+                .or_default()
+                .push(step);
         });
     }
 }

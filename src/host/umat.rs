@@ -97,7 +97,7 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockEr
 use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, UmatScene};
 use super::mirrors::{mirrors, mirrors_of, MIRRORS};
-use super::share_table::{Anchor, IncrementKey, ShareTable};
+use super::share_table::{Anchor, IncrementKey, ShareTable, Step};
 use super::vtk_dump::{self, VtkDump};
 use crate::error::Error;
 use crate::model::share;
@@ -782,7 +782,8 @@ impl Umat {
         p.instance
             .set_lean(p.material.model.solver.integration != Integration::Implex && !dumped);
         // A point whose fields are written solves its own answer.
-        if timed && !dumped {
+        let implex = p.material.model.solver.integration == Integration::Implex;
+        if timed && !dumped && !implex {
             if let Some((r, core)) = self.shared_answer(p, c, &out.statev[..n])? {
                 write_outputs(p, c, &r, out, Some(n), Some(&core))?;
                 return Ok(Outcome {
@@ -793,7 +794,8 @@ impl Umat {
                 });
             }
         }
-        let (r, solved) = self.statev_answer(p, c, &out.statev[..n], timed)?;
+        let may_share = timed && !dumped;
+        let (r, solved) = self.statev_answer(p, c, &out.statev[..n], (timed, may_share))?;
         write_outputs(p, c, &r, out, Some(n), None)?;
         vtk_dump::at_answer(&self.vtk, &p.instance, c);
         Ok(Outcome {
@@ -922,7 +924,7 @@ impl Umat {
         p: &mut Point,
         c: &UmatCall,
         statev: &[f64],
-        timed: bool,
+        (timed, may_share): (bool, bool),
     ) -> crate::Result<(Response, bool)> {
         let strain = call_strain(p, c)?;
         let model = p.material.model.clone();
@@ -955,6 +957,7 @@ impl Umat {
         check_start_strain(p, c, virgin, timed)?;
         p.trial_hash = None;
         let request = p.material.tangent;
+        let step = may_share.then(|| self.shared_step(p, c)).flatten();
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         })?;
@@ -963,7 +966,10 @@ impl Umat {
         p.write_trial(&mut written)?;
         p.trial_hash = Some(values_hash(&written));
         let solved = r.report.answer != Answer::Repeated;
-        if solved && timed && sharing(p).is_some() {
+        if let Some(step) = step {
+            return Ok((r, self.step_shared(p, c, step, &r)));
+        }
+        if solved && timed && sharing(p).is_some() && !implex_model(p) {
             let mut trial = p.instance.trial_core()?;
             trial.time = p.trial_time;
             let anchor = Anchor {
@@ -977,6 +983,57 @@ impl Umat {
         let counter = if solved { &self.solves } else { &self.repeats };
         counter.fetch_add(1, Ordering::Relaxed);
         Ok((r, solved))
+    }
+
+    /// IMPL-EX step sharing (`docs/sharing.md`): before the point's update, the step of
+    /// this increment factorized from the point's committed core (an earlier call of the
+    /// point), else from a core within the tolerance (another point), taken as the point's
+    /// own ([`Instance::adopt_step`]), so the update answers without a factorization.
+    /// `Some(committed core, shared)`: the point shares (`shared` true: a step was adopted);
+    /// `None`: no sharing (not IMPL-EX, no tolerance, or the point already holds its step).
+    fn shared_step(&self, p: &mut Point, c: &UmatCall) -> Option<(statev::Core, bool)> {
+        let tol = sharing(p).filter(|_| implex_model(p))?;
+        let ratio = crate::solver::implex::step_ratio(p.instance.committed().implex.step, c.dtime);
+        let ratio = ratio.to_bits();
+        if p.instance.implex_step().is_some_and(|(_, r)| r == ratio) {
+            return None;
+        }
+        let core = p.instance.committed_core();
+        let model = p.material.model.clone();
+        let found = self
+            .share
+            .follow_step(&model, increment_key(c), tol, (&core, ratio));
+        let adopted = found.is_some_and(|s| p.instance.adopt_step(&s.step, ratio, c.dtime));
+        Some((core, adopted))
+    }
+
+    /// After an update of [`Umat::shared_step`]: counts the call, and records the step a
+    /// call that factorized it solved; returns whether the call solved.
+    fn step_shared(
+        &self,
+        p: &Point,
+        c: &UmatCall,
+        (core, adopted): (statev::Core, bool),
+        r: &Response,
+    ) -> bool {
+        if adopted {
+            self.shared.fetch_add(1, Ordering::Relaxed);
+            return false;
+        }
+        let counter = match r.report.answer {
+            Answer::Repeated => &self.repeats,
+            _ => &self.solves,
+        };
+        counter.fetch_add(1, Ordering::Relaxed);
+        let Some((step, ratio)) = p.instance.implex_step() else {
+            return true;
+        };
+        if r.report.factorizations > 0 {
+            let step = Step::new(core, step.clone(), ratio);
+            self.share
+                .insert_step(&p.material.model, increment_key(c), step);
+        }
+        r.report.answer != Answer::Repeated
     }
 
     /// A point called with another material than it was created for: a new analysis
@@ -1317,6 +1374,11 @@ fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool, timed: bool) -> cra
 fn sharing(p: &Point) -> Option<f64> {
     let tol = share::tolerance(&p.material.model)?;
     (p.material.tangent == TangentRequest::Consistent).then_some(tol)
+}
+
+/// Whether the point's material integrates by IMPL-EX (step sharing).
+fn implex_model(p: &Point) -> bool {
+    p.material.model.solver.integration == Integration::Implex
 }
 
 /// The share table's increment of a call.

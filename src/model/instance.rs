@@ -535,6 +535,49 @@ impl Instance {
         Ok(())
     }
 
+    /// The IMPL-EX step the pending trial was answered on (`D_ex`, the jump operators
+    /// `A_q`, the frozen contact status: `crate::state::LinearBranch`), with the step ratio
+    /// `dt / dt_n` it was factorized for; `None` without a pending IMPL-EX trial that holds
+    /// one. What [`adopt_step`](Self::adopt_step) gives another instance.
+    pub fn implex_step(&self) -> Option<(&crate::state::LinearBranch, u64)> {
+        match (self.pending, &self.trial, self.implex_step) {
+            (Pending::Solved, Some(trial), Some(ratio)) if trial.linear.valid => {
+                Some((&trial.linear, ratio))
+            }
+            _ => None,
+        }
+    }
+
+    /// Takes `step`, an IMPL-EX step another instance factorized (its
+    /// [`implex_step`](Self::implex_step)) from a committed state close to this one's, as
+    /// the step of this instance's committed state for `dt`: the next
+    /// [`update_timed`](Self::update_timed) at `dt` answers on it without a factorization,
+    /// `sigma = D_ex eps`, and forms this instance's own trial history from the jumps
+    /// `A_q eps` and its own committed history (`crate::solver::implex::finish_step`). The
+    /// trial's fluctuation is not formed (outputs that need it refuse, as after any
+    /// reused step at another strain). `false` (nothing changes): not an IMPL-EX model,
+    /// no fast path, or a step of another ratio than `dt`'s from this committed state.
+    pub fn adopt_step(&mut self, step: &crate::state::LinearBranch, ratio: u64, dt: f64) -> bool {
+        let own = implex::step_ratio(self.committed.implex.step, dt).to_bits();
+        if self.model.solver.integration != Integration::Implex
+            || !self.model.solver.fast_path
+            || !step.valid
+            || own != ratio
+        {
+            return false;
+        }
+        self.revert();
+        let model = &self.model;
+        let trial = self
+            .trial
+            .get_or_insert_with(|| Box::new(model.new_state()));
+        trial.linear.clone_from(step);
+        // The unknowns are not the step's at any strain.
+        trial.linear.unknowns_strain = [f64::NAN; 3];
+        self.implex_step = Some(ratio);
+        true
+    }
+
     /// Whether the pending solved trial holds another contact status than the committed
     /// state at some ITZ point (held points, or IMPL-EX's closed points); false without
     /// one, and for a fast trial (same status by construction).
@@ -630,5 +673,43 @@ mod tests {
                 inst.load_core(Some(&cores[0].1), &mut ws).unwrap();
             }
         }
+    }
+
+    /// An IMPL-EX instance that adopts another's step, factorized from the same committed
+    /// state, answers and writes its trial bit for bit as if it had factorized the step
+    /// itself, without a factorization; a step of another ratio is refused.
+    #[test]
+    fn an_adopted_implex_step_answers_as_the_own_one() {
+        let text = DEFAULT_SCENE_TOML.replace("[solver]\n", "[solver]\nintegration = \"implex\"\n");
+        let model = cache::model_for_text(&text, None).unwrap();
+        let mut ws = model.workspace();
+        let consistent = TangentRequest::Consistent;
+        let (mut anchor, mut own) = (Instance::new(model.clone()), Instance::new(model.clone()));
+        let mut follower = Instance::new(model.clone());
+        for k in 1..=6 {
+            let strain = |x: f64| [x * 4e-5 * k as f64, -1e-5 * k as f64, 2e-5];
+            anchor
+                .update_timed(strain(0.9), 1.0, &mut ws, consistent)
+                .unwrap();
+            let (step, ratio) = anchor.implex_step().unwrap();
+            assert!(!follower.adopt_step(step, ratio ^ 1, 1.0));
+            assert!(follower.adopt_step(step, ratio, 1.0));
+            let r = follower
+                .update_timed(strain(1.0), 1.0, &mut ws, consistent)
+                .unwrap();
+            let e = own
+                .update_timed(strain(1.0), 1.0, &mut ws, consistent)
+                .unwrap();
+            assert_eq!(r.report.factorizations, 0, "increment {k}");
+            assert_eq!(e.report.factorizations, 1, "increment {k}");
+            assert_eq!(r.stress.map(f64::to_bits), e.stress.map(f64::to_bits));
+            assert_eq!(r.tangent.map(f64::to_bits), e.tangent.map(f64::to_bits));
+            assert_eq!(follower.trial_core().unwrap(), own.trial_core().unwrap());
+            let core = own.trial_core().unwrap();
+            for inst in [&mut anchor, &mut own, &mut follower] {
+                inst.load_core(Some(&core), &mut ws).unwrap();
+            }
+        }
+        assert!(own.committed().history.iter().any(|&h| h > 0.0));
     }
 }

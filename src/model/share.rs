@@ -18,8 +18,10 @@
 //! **Correction.** The follower's answer is the anchor's to first order in the strain,
 //! `sigma = sigma_a + D_a (eps - eps_a)`, `s_zz = s_zz,a + d s_zz,a (eps - eps_a)`, its
 //! tangent `D_a`; its trial state is the anchor's trial moved to `eps`
-//! ([`Instance::adopt_trial`]; in `STATEV` mode the anchor's written core with the
-//! follower's strain), so that the state a host keeps carries the point's own strain.
+//! ([`Instance::adopt_trial`]; in `STATEV` mode with implicit integration the anchor's
+//! written core with the follower's strain), so that the state a host keeps carries the
+//! point's own strain. In `STATEV` mode under IMPL-EX the UMAT shares the anchor's step
+//! instead ([`Instance::adopt_step`]): the follower answers on it and forms its own trial.
 //! The error left is of second order in `eps - eps_a` plus first order in the history
 //! difference `h - h_a`, both bounded by `tol` above.
 //!
