@@ -5,7 +5,7 @@
 
 use std::ffi::{c_char, c_int};
 
-use super::boundary::{guard, slice, slice_mut, Failure, FfiResult};
+use super::guard::{guard, slice, slice_mut, Failure, FfiResult};
 use super::status::RveStatus;
 use crate::host::diagnostics::{failure_once, note_once, Note};
 use crate::host::umat::{
