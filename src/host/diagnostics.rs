@@ -1,5 +1,5 @@
-//! The library's messages to the user: one sink, stderr, and two ways of saying a thing
-//! once per process.
+//! The library's messages to the user: one sink, stderr ([`say`]), and two ways of saying
+//! a thing once per process.
 //!
 //! A host calls the UMAT at every integration point of every increment, so a message
 //! said at each call would bury the host's own output. Two rules keep it to a line:
@@ -50,7 +50,9 @@ pub const SAID_ONCE: &str =
     "(printed once per process for this reason; rve_last_error has each call's message)";
 
 /// Writes `line` on stderr; a write error is ignored (stderr closed: nothing to tell).
-fn say(line: &str) {
+/// The one writer of the library's messages (`MESORVE_UMAT_VTK`'s notes, said once per
+/// table, use it directly).
+pub(crate) fn say(line: &str) {
     let _ = writeln!(std::io::stderr(), "{line}");
 }
 
