@@ -242,24 +242,29 @@ fn run_set_equals_the_edited_scene() {
         );
         let (header, rows) = read_csv(&out_dir.join("response.csv"));
         let seconds = header.iter().position(|h| h == "seconds").unwrap();
-        let rows: Vec<Vec<f64>> = rows
-            .into_iter()
+        rows.into_iter()
             .map(|mut r| {
                 r.remove(seconds);
                 r
             })
-            .collect();
-        rows
+            .collect::<Vec<Vec<f64>>>()
     };
     let by_file = run("file", &[edited.to_str().unwrap()]);
     let by_set = run("set", &["--set", "materials.itz.sigma_c=3.5"]);
     let own = run("own", &[]);
     assert_eq!(by_set, by_file);
     assert_ne!(by_set, own);
+    let (path_dir, shorter) =
+        edited_paper_scene("rve-run-set-path", ("increments = 20", "increments = 7"));
+    let by_path_file = run("path_file", &[shorter.to_str().unwrap()]);
+    let by_path_set = run("path_set", &["--set", "path.0.increments=7"]);
+    assert_eq!(by_path_set.len(), 7);
+    assert_eq!(by_path_set, by_path_file);
     for (set, why) in [
         ("materials.itz.sigma_c", "not KEY=VALUE"),
         ("materials.itz.sigma_c=-1", "sigma_c"),
         ("materials..young=1", "an empty part"),
+        ("path.3.increments=7", "no `3`"),
     ] {
         let out = rve(&[
             "run",
@@ -273,5 +278,6 @@ fn run_set_equals_the_edited_scene() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(why), "--set {set}: {err}");
     }
+    std::fs::remove_dir_all(&path_dir).ok();
     std::fs::remove_dir_all(&dir).ok();
 }

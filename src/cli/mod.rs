@@ -44,8 +44,8 @@ fn load_scene(path: Option<&PathBuf>) -> Result<(Scene, String)> {
 
 /// Loads `path` (the embedded paper scene when none is given) with each `KEY=VALUE` of
 /// `sets` applied: `KEY` a dotted scene key (`solver.step_tolerance`,
-/// `materials.itz.sigma_c`; tables that are missing are created, `[[path]]` entries are
-/// not addressable), `VALUE` a TOML value (`0.5`, `true`, `"lu"`, `[1, 2]`) or, when it
+/// `materials.itz.sigma_c`, `path.0.increments` for an entry of an array; tables that
+/// are missing are created), `VALUE` a TOML value (`0.5`, `true`, `"lu"`, `[1, 2]`) or, when it
 /// does not parse as one, a string. The scene is then validated as a file would be.
 fn load_scene_with(path: Option<&PathBuf>, sets: &[String]) -> Result<(Scene, String)> {
     if sets.is_empty() {
@@ -81,6 +81,19 @@ fn load_scene_with(path: Option<&PathBuf>, sets: &[String]) -> Result<(Scene, St
     Ok((scene, with))
 }
 
+/// The part `part` of a key below `node`: a table's entry (created as a table when
+/// missing), an array's entry by its index from 0 (`path.0`); `None` otherwise.
+fn child<'a>(node: &'a mut toml::Value, part: &str) -> Option<&'a mut toml::Value> {
+    match node {
+        toml::Value::Table(t) => Some(
+            t.entry(part.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new())),
+        ),
+        toml::Value::Array(a) => a.get_mut(part.parse::<usize>().ok()?),
+        _ => None,
+    }
+}
+
 /// Applies one `KEY=VALUE` of `--set` to `table`.
 fn set_key(table: &mut toml::Table, set: &str) -> Result<()> {
     let bad = |why: &str| Error::SceneParse(format!("--set {set}: {why}"));
@@ -94,16 +107,26 @@ fn set_key(table: &mut toml::Table, set: &str) -> Result<()> {
     if parts.iter().any(|p| p.is_empty()) {
         return Err(bad("an empty part in the key"));
     }
-    let (leaf, parents) = parts.split_last().expect("split gives one part at least");
-    let mut node = table;
-    for part in parents {
-        node = node
-            .entry(part.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
-            .as_table_mut()
-            .ok_or_else(|| bad(&format!("`{part}` is not a table")))?;
+    let (first, rest) = parts.split_first().expect("split gives one part at least");
+    let Some((leaf, middle)) = rest.split_last() else {
+        table.insert(first.to_string(), value);
+        return Ok(());
+    };
+    let new_table = || toml::Value::Table(toml::Table::new());
+    let mut node = table.entry(first.to_string()).or_insert_with(new_table);
+    for part in middle {
+        node = child(node, part).ok_or_else(|| bad(&format!("no `{part}` there")))?;
     }
-    node.insert(leaf.to_string(), value);
+    match node {
+        toml::Value::Table(t) => {
+            t.insert(leaf.to_string(), value);
+        }
+        toml::Value::Array(a) => {
+            let entry = leaf.parse::<usize>().ok().and_then(|i| a.get_mut(i));
+            *entry.ok_or_else(|| bad(&format!("no entry `{leaf}` in the array")))? = value;
+        }
+        _ => return Err(bad("the key goes through a value that is not a table")),
+    }
     Ok(())
 }
 

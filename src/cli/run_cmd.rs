@@ -42,7 +42,8 @@ pub struct RunArgs {
     /// Set a scene key before the run, as if the file said so (repeatable):
     /// `--set materials.itz.sigma_c=3.5 --set solver.tolerance=1e-8`. VALUE is a TOML
     /// value (a number, `true`, `"text"`, `[1, 2]`), else taken as a string; missing
-    /// tables are created; `[[path]]` entries cannot be set. The scene is validated after.
+    /// tables are created; `path.0.increments` is the first `[[path]]`'s. The scene is
+    /// validated after.
     #[arg(long, value_name = "KEY=VALUE")]
     set: Vec<String>,
 }
