@@ -27,12 +27,6 @@ use rve::ffi::*;
 use rve::solver::Answer;
 use rve::{Instance, Model, Scene, State, TangentRequest};
 
-extern "C" {
-    /// In `rve.h` and exported by the library, but not re-exported by `rve::ffi`: the
-    /// updates of an instance answered without a solve (fast path and repeated trials).
-    fn rve_fast_updates(h: RveHandle, count: *mut u64) -> u32;
-}
-
 const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/paper_rve.toml");
 
 /// The committed loading path (eps_xx): pre-peak (the paper RVE peaks near 2e-4).

@@ -89,16 +89,22 @@ fn embedded_default_writes_vtk_and_svg() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A fresh temporary directory `NAME-<pid>` and in it the paper scene with one
+/// replacement, `scene.toml`.
+fn edited_paper_scene(
+    name: &str,
+    replace: (&str, &str),
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, common::paper_scene_with(&[replace])).unwrap();
+    (dir, path)
+}
+
 #[test]
 fn bad_scene_exits_nonzero_with_the_key_in_the_message() {
-    let dir = std::env::temp_dir().join(format!("rve-cli-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("bad.toml");
-    std::fs::write(
-        &path,
-        common::paper_scene_with(&[("delta_c = 0.0002", "delta_c = 0.0")]),
-    )
-    .unwrap();
+    let (dir, path) = edited_paper_scene("rve-cli-bad", ("delta_c = 0.0002", "delta_c = 0.0"));
     let out = rve(&["mesh", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
@@ -217,4 +223,61 @@ fn info_gives_the_umat_nstatv_that_keeps_the_state() {
     let text = rve(&["info"]);
     assert!(text.status.success());
     assert!(String::from_utf8_lossy(&text.stdout).contains("umat_nstatv"));
+}
+
+/// `rve run --set KEY=VALUE` gives the run of the scene whose file says so: the same
+/// `response.csv` (but `seconds`) as an edited copy, and another than the scene's own.
+#[test]
+fn run_set_equals_the_edited_scene() {
+    let (dir, edited) = edited_paper_scene("rve-run-set", ("sigma_c = 4.0", "sigma_c = 3.5"));
+    let run = |name: &str, extra: &[&str]| {
+        let out_dir = dir.join(name);
+        let mut args = vec!["run", "--out", out_dir.to_str().unwrap(), "--quiet"];
+        args.extend_from_slice(extra);
+        let out = rve(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let (header, rows) = read_csv(&out_dir.join("response.csv"));
+        let seconds = header.iter().position(|h| h == "seconds").unwrap();
+        rows.into_iter()
+            .map(|mut r| {
+                r.remove(seconds);
+                r
+            })
+            .collect::<Vec<Vec<f64>>>()
+    };
+    let by_file = run("file", &[edited.to_str().unwrap()]);
+    let by_set = run("set", &["--set", "materials.itz.sigma_c=3.5"]);
+    let own = run("own", &[]);
+    assert_eq!(by_set, by_file);
+    assert_ne!(by_set, own);
+    let (path_dir, shorter) =
+        edited_paper_scene("rve-run-set-path", ("increments = 20", "increments = 7"));
+    let by_path_file = run("path_file", &[shorter.to_str().unwrap()]);
+    let by_path_set = run("path_set", &["--set", "path.0.increments=7"]);
+    assert_eq!(by_path_set.len(), 7);
+    assert_eq!(by_path_set, by_path_file);
+    for (set, why) in [
+        ("materials.itz.sigma_c", "not KEY=VALUE"),
+        ("materials.itz.sigma_c=-1", "sigma_c"),
+        ("materials..young=1", "an empty part"),
+        ("path.3.increments=7", "no `3`"),
+    ] {
+        let out = rve(&[
+            "run",
+            "--out",
+            dir.join("bad").to_str().unwrap(),
+            "--quiet",
+            "--set",
+            set,
+        ]);
+        assert_eq!(out.status.code(), Some(1), "--set {set}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(why), "--set {set}: {err}");
+    }
+    std::fs::remove_dir_all(&path_dir).ok();
+    std::fs::remove_dir_all(&dir).ok();
 }

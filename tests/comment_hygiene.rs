@@ -1,12 +1,16 @@
-//! Comments in `src/` say what the code does and why: no issue numbers, no measured
-//! figures (speed-ups, timings, "measured ..." with a number) and no history of what was
-//! tried. Measurements belong in `docs/`, history in the CHANGELOG and commit messages.
+//! Comments in `src/` and `tests/` say what the code does and why: no issue numbers, no
+//! measured figures (speed-ups, timings, "measured ..." with a number; a test may give the
+//! figure its threshold's margin rests on) and no history of what was tried. Measurements
+//! belong in `docs/`, history in the CHANGELOG and commit messages.
 //!
 //! The rules are patterns over comment blocks (consecutive `//`, `///` or `//!` lines,
 //! joined, so that a phrase wrapped over two lines is read whole), each with the reason
 //! it exists; a match names the file and the block's first line.
 
 use std::path::Path;
+
+/// The rule of measured figures, which a test's comment may break (see below).
+const MEASURED: &str = "a measured figure (docs/)";
 
 /// A comment-line rule: the phrase it refuses, and a predicate on the lowercase text.
 struct Rule {
@@ -55,7 +59,7 @@ const RULES: &[Rule] = &[
         matches: timing,
     },
     Rule {
-        what: "a measured figure (docs/)",
+        what: MEASURED,
         matches: |s| {
             s.match_indices("measured")
                 .any(|(i, _)| !s[i..].starts_with("measured from") && has_digit(&s[i..]))
@@ -138,12 +142,16 @@ fn walk(dir: &Path, offences: &mut Vec<String>) {
 }
 
 #[test]
-fn comments_in_src_hold_no_history_issue_numbers_or_measured_figures() {
+fn comments_in_src_and_tests_hold_no_history_issue_numbers_or_measured_figures() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut offences = Vec::new();
-    walk(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("src"),
-        &mut offences,
-    );
+    walk(&root.join("src"), &mut offences);
+    // The tests too, but this file, whose comments quote what the rules refuse; a test's
+    // measured figure stays (it is the reason for the margin of its threshold).
+    let mut in_tests = Vec::new();
+    walk(&root.join("tests"), &mut in_tests);
+    in_tests.retain(|o| !o.contains("comment_hygiene.rs:") && !o.contains(MEASURED));
+    offences.extend(in_tests);
     assert!(
         offences.is_empty(),
         "{} comment lines:\n{}",
@@ -180,4 +188,22 @@ fn the_rules_catch_what_they_name() {
     ] {
         assert!(!caught(fine), "{fine}");
     }
+}
+
+/// `tests/README.md` names every test file of `tests/` (its map of what each guards).
+#[test]
+fn the_test_map_names_every_test_file() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let map = std::fs::read_to_string(dir.join("README.md")).unwrap();
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        if name.ends_with(".rs") && !map.contains(&format!("`{name}`")) {
+            missing.push(name);
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "tests/README.md does not name {missing:?}"
+    );
 }

@@ -1,4 +1,4 @@
-//! The fast path (`rve::solver::fast_path`, issue 15): an update that keeps every ITZ point
+//! The fast path (`rve::solver::fast_path`): an update that keeps every ITZ point
 //! on the linear branch of its last full solve is answered as `D_b eps` without Newton.
 //!
 //! Every increment of every path here is computed twice from the same committed state:

@@ -1,4 +1,4 @@
-//! Hard cases of issue 13 with the paper's contact law: 40 seeded paths a host could hand
+//! Hard cases with the paper's contact law: 40 seeded paths a host could hand
 //! an RVE past the peak (`common/hard_paths.rs`: uniaxial strain in a random direction,
 //! uniaxial-stress-like paths with Poisson contraction, pure shear and its reversal,
 //! biaxial paths, tension then compression, unload and reload beyond the old peak, a turn

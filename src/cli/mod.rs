@@ -10,8 +10,8 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
-use rve::error::Result;
-use rve::scene::{Scene, DEFAULT_SCENE_NAME};
+use rve::error::{Error, Result};
+use rve::scene::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -40,6 +40,94 @@ fn load_scene(path: Option<&PathBuf>) -> Result<(Scene, String)> {
         Some(p) => Ok((Scene::from_file(p)?, p.display().to_string())),
         None => Ok((Scene::embedded_default()?, DEFAULT_SCENE_NAME.to_string())),
     }
+}
+
+/// Loads `path` (the embedded paper scene when none is given) with each `KEY=VALUE` of
+/// `sets` applied: `KEY` a dotted scene key (`solver.step_tolerance`,
+/// `materials.itz.sigma_c`, `path.0.increments` for an entry of an array; tables that
+/// are missing are created), `VALUE` a TOML value (`0.5`, `true`, `"lu"`, `[1, 2]`) or, when it
+/// does not parse as one, a string. The scene is then validated as a file would be.
+fn load_scene_with(path: Option<&PathBuf>, sets: &[String]) -> Result<(Scene, String)> {
+    if sets.is_empty() {
+        return load_scene(path);
+    }
+    let (text, base, name) = match path {
+        Some(p) => (
+            std::fs::read_to_string(p).map_err(|source| Error::Io {
+                path: p.clone(),
+                source,
+            })?,
+            p.parent().map(PathBuf::from).unwrap_or_default(),
+            p.display().to_string(),
+        ),
+        None => (
+            DEFAULT_SCENE_TOML.to_string(),
+            PathBuf::from("."),
+            DEFAULT_SCENE_NAME.to_string(),
+        ),
+    };
+    let parse = |e: toml::de::Error| Error::SceneParse(format!("{name}: {e}"));
+    let mut table: toml::Table = text.parse().map_err(parse)?;
+    for set in sets {
+        set_key(&mut table, set)?;
+    }
+    let edited = toml::to_string(&table).map_err(|e| Error::SceneParse(e.to_string()))?;
+    let with = format!("{name} with --set {}", sets.join(" --set "));
+    let scene = Scene::from_toml_str(&edited, base).map_err(|e| match e {
+        // Its line numbers are those of the edited scene, which TOML re-serialized.
+        Error::SceneParse(msg) => Error::SceneParse(format!("{with}: {msg}")),
+        other => other,
+    })?;
+    Ok((scene, with))
+}
+
+/// The part `part` of a key below `node`: a table's entry (created as a table when
+/// missing), an array's entry by its index from 0 (`path.0`); `None` otherwise.
+fn child<'a>(node: &'a mut toml::Value, part: &str) -> Option<&'a mut toml::Value> {
+    match node {
+        toml::Value::Table(t) => Some(
+            t.entry(part.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new())),
+        ),
+        toml::Value::Array(a) => a.get_mut(part.parse::<usize>().ok()?),
+        _ => None,
+    }
+}
+
+/// Applies one `KEY=VALUE` of `--set` to `table`.
+fn set_key(table: &mut toml::Table, set: &str) -> Result<()> {
+    let bad = |why: &str| Error::SceneParse(format!("--set {set}: {why}"));
+    let (key, text) = set.split_once('=').ok_or_else(|| bad("not KEY=VALUE"))?;
+    let value = format!("v = {}", text.trim())
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(text.trim().to_string()));
+    let parts: Vec<&str> = key.trim().split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err(bad("an empty part in the key"));
+    }
+    let (first, rest) = parts.split_first().expect("split gives one part at least");
+    let Some((leaf, middle)) = rest.split_last() else {
+        table.insert(first.to_string(), value);
+        return Ok(());
+    };
+    let new_table = || toml::Value::Table(toml::Table::new());
+    let mut node = table.entry(first.to_string()).or_insert_with(new_table);
+    for part in middle {
+        node = child(node, part).ok_or_else(|| bad(&format!("no `{part}` there")))?;
+    }
+    match node {
+        toml::Value::Table(t) => {
+            t.insert(leaf.to_string(), value);
+        }
+        toml::Value::Array(a) => {
+            let entry = leaf.parse::<usize>().ok().and_then(|i| a.get_mut(i));
+            *entry.ok_or_else(|| bad(&format!("no entry `{leaf}` in the array")))? = value;
+        }
+        _ => return Err(bad("the key goes through a value that is not a table")),
+    }
+    Ok(())
 }
 
 /// Entry point of the `rve` binary; returns the process exit code.

@@ -12,7 +12,7 @@ use rve::error::{Error, Result};
 use rve::scene::path_points;
 use rve::{Instance, Model, Response, TangentRequest};
 
-use super::load_scene;
+use super::load_scene_with;
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
@@ -39,6 +39,13 @@ pub struct RunArgs {
     /// or a list of increment numbers `N,M,...` (from 1).
     #[arg(long, default_value = "last", value_parser = parse_frames)]
     frames: Frames,
+    /// Set a scene key before the run, as if the file said so (repeatable):
+    /// `--set materials.itz.sigma_c=3.5 --set solver.tolerance=1e-8`. VALUE is a TOML
+    /// value (a number, `true`, `"text"`, `[1, 2]`), else taken as a string; missing
+    /// tables are created; `path.0.increments` is the first `[[path]]`'s. The scene is
+    /// validated after.
+    #[arg(long, value_name = "KEY=VALUE")]
+    set: Vec<String>,
 }
 
 /// Which increments `--svg` pictures.
@@ -72,7 +79,7 @@ fn parse_frames(s: &str) -> std::result::Result<Frames, String> {
 pub const CSV_HEADER: &str = "step,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy,D11,D12,D13,D21,D22,D23,D31,D32,D33,iterations,substeps,s_zz,factorizations,loading_points,unloading_points,contact_points,seconds,limit_points,held_points,fast,check_factorizations,step_too_large,error_estimate,step_ratio";
 
 pub fn run(args: &RunArgs) -> Result<()> {
-    let (scene, name) = load_scene(args.scene.as_ref())?;
+    let (scene, name) = load_scene_with(args.scene.as_ref(), &args.set)?;
     if scene.spec.path.is_empty() {
         return Err(Error::scene(
             "path",

@@ -4,7 +4,7 @@
 
 use std::ffi::c_char;
 
-use super::boundary::{copy_message, guard, slice, slice_mut, Failure, FfiResult};
+use super::guard::{copy_message, guard, slice, slice_mut, Failure, FfiResult};
 use super::instance::{update_entry, RveHandle, RveReliability, RveTangentRequest};
 use super::registry;
 use super::status::RveStatus;

@@ -6,7 +6,7 @@ use std::ffi::{c_char, CStr};
 use std::path::Path;
 use std::sync::Arc;
 
-use super::boundary::{guard, out, slice, slice_mut, Failure, FfiResult};
+use super::guard::{guard, out, slice, slice_mut, Failure, FfiResult};
 use super::registry::{self, Entry};
 use super::status::RveStatus;
 use crate::model::batch::{BatchPoint, PointReport, Reliability};

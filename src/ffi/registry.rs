@@ -8,7 +8,7 @@
 
 use std::sync::{Arc, Mutex, MutexGuard, RwLock, TryLockError};
 
-use super::boundary::{Failure, FfiResult};
+use super::guard::{Failure, FfiResult};
 use super::status::RveStatus;
 use crate::model::{Instance, Model};
 

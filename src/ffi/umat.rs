@@ -3,13 +3,11 @@
 //! (CalculiX, which upper-cases the function name of `@ABAQUS_<LIB>_<FUNC>`). Only
 //! pointer translation here; the logic is `crate::host::umat`.
 
-use std::collections::HashSet;
 use std::ffi::{c_char, c_int};
-use std::io::Write;
-use std::sync::{LazyLock, Mutex, PoisonError};
 
-use super::boundary::{guard, slice, slice_mut, Failure, FfiResult};
+use super::guard::{guard, slice, slice_mut, Failure, FfiResult};
 use super::status::RveStatus;
+use crate::host::diagnostics::{failure_once, note_once, Note};
 use crate::host::umat::{
     global, request_step_ratio, umat_scene, HostSignal, UmatCall, UmatOutputs, FAILURE_STEP_RATIO,
 };
@@ -17,93 +15,6 @@ use crate::host::Hypothesis;
 
 /// CMNAME is `CHARACTER*80` in Abaqus: no more is read.
 const CMNAME_MAX: usize = 80;
-
-/// The failure reasons printed on stderr by this process (see [`reason_key`]): a host
-/// calls the UMAT at every point of every element, and an element type the RVE cannot
-/// answer (a plane-stress element on a plane-strain scene, an axisymmetric one) fails at
-/// each of them for one reason, which is printed once.
-static PRINTED: LazyLock<Mutex<HashSet<String>>> = LazyLock::new(|| Mutex::new(HashSet::new()));
-
-/// What stands after the first line of a reason.
-const PRINTED_ONCE: &str =
-    "(printed once per process for this reason; rve_last_error has each call's message)";
-
-/// `text` with every number replaced by `#`: a run of digits that does not continue a
-/// word (`gamma_13`, `E33` and `NTENS` stay), with its sign, decimals and exponent
-/// (`-1.5e-5`, `0.25`, `4`). What the same reason at another point or strain shares.
-fn mask_numbers(text: &str) -> String {
-    let c: Vec<char> = text.chars().collect();
-    let word = |i: usize| i > 0 && (c[i - 1].is_alphanumeric() || c[i - 1] == '_');
-    let digit = |i: usize| c.get(i).is_some_and(char::is_ascii_digit);
-    let digits_from = |mut i: usize| {
-        while digit(i) {
-            i += 1;
-        }
-        i
-    };
-    let mut out = String::with_capacity(text.len());
-    let mut i = 0;
-    while i < c.len() {
-        let signed = matches!(c[i], '-' | '+') && digit(i + 1);
-        if !(digit(i) || signed) || word(i) {
-            out.push(c[i]);
-            i += 1;
-            continue;
-        }
-        i = digits_from(i + usize::from(signed));
-        if c.get(i) == Some(&'.') && digit(i + 1) {
-            i = digits_from(i + 1);
-        }
-        if matches!(c.get(i), Some('e' | 'E')) {
-            let sign = usize::from(matches!(c.get(i + 1), Some('-' | '+')));
-            if digit(i + 1 + sign) {
-                i = digits_from(i + 1 + sign);
-            }
-        }
-        out.push('#');
-    }
-    out
-}
-
-/// `text` with each span between backquotes (a material or scene name, a path: the
-/// host's arguments as messages quote them) replaced by `#`.
-fn mask_quoted(text: &str) -> String {
-    text.split('`')
-        .enumerate()
-        .map(|(i, part)| if i % 2 == 1 { "#" } else { part })
-        .collect::<Vec<_>>()
-        .join("`")
-}
-
-/// The key a failure is printed once under: the error's text with its quoted names and
-/// its numbers masked, so a reason is printed once whatever the arguments (the material,
-/// the strain, PNEWDT, the element and point numbers); the line itself names them.
-fn reason_key(reason: &str) -> String {
-    mask_numbers(&mask_quoted(reason))
-}
-
-/// Writes `line` (and the note that it is printed once) to `out` when `seen` does not
-/// hold the reason yet, and remembers it; returns whether it wrote. Write errors are
-/// ignored (stderr closed: nothing to tell).
-fn report_once(seen: &mut HashSet<String>, reason: &str, line: &str, out: &mut dyn Write) -> bool {
-    if !seen.insert(reason_key(reason)) {
-        return false;
-    }
-    let _ = writeln!(out, "{line} {PRINTED_ONCE}");
-    true
-}
-
-/// [`report_once`] on stderr with the process's [`PRINTED`] reasons. Never unwinds (it
-/// also runs outside the panic boundary).
-fn print_once(reason: &str, line: &str) {
-    let _ = std::panic::catch_unwind(|| {
-        let mut seen = PRINTED.lock().unwrap_or_else(PoisonError::into_inner);
-        report_once(&mut seen, reason, line, &mut std::io::stderr());
-    });
-}
-
-/// Said once: a host without `PNEWDT` and without `MESORVE_UMAT_SCENE`.
-static NO_SCENE_NOTE: std::sync::Once = std::sync::Once::new();
 
 /// A host's bytes as text that is safe to print: up to the first NUL, printable ASCII
 /// kept, any other byte as `\xNN`.
@@ -168,11 +79,10 @@ impl Args {
             return Ok(scene.name.clone());
         }
         if signal == HostSignal::NanStress {
-            NO_SCENE_NOTE.call_once(|| {
-                eprintln!(
-                    "mesorve UMAT: a host without PNEWDT and no MESORVE_UMAT_SCENE: CMNAME is \
-                     not read, every point is the embedded paper RVE (printed once)"
-                )
+            note_once(Note::NoScene, || {
+                "mesorve UMAT: a host without PNEWDT and no MESORVE_UMAT_SCENE: CMNAME is not \
+                 read, every point is the embedded paper RVE (printed once)"
+                    .to_string()
             });
             return Ok(String::new());
         }
@@ -252,7 +162,7 @@ impl Args {
             .map_err(|f| {
                 *reported = true;
                 if f.first_report {
-                    print_once(&f.error.to_string(), &format!("mesorve UMAT: {f}"));
+                    failure_once(&f.error.to_string(), &format!("mesorve UMAT: {f}"));
                 }
                 Failure {
                     status: RveStatus::from(&*f.error),
@@ -313,7 +223,10 @@ impl Args {
 /// `PROPS` (`NPROPS`), `TIME` (2; 1 when `PNEWDT` is NULL), `CMNAME` (`cmname_len`
 /// bytes, at most 80 read; not read when `MESORVE_UMAT_SCENE` is set or `PNEWDT` is NULL),
 /// the scalars; a NULL one fails the call. The arguments listed as not read may be NULL.
+// Also exported as `umat_` and `UMAT`, the names hosts look up, kept out of the header (a
+// C host declares the Abaqus prototype itself): the parameters are written once, here.
 #[allow(clippy::too_many_arguments)]
+#[mesorve_macros::aliases(umat_, UMAT)]
 #[no_mangle]
 pub unsafe extern "C" fn rve_umat(
     stress: *mut f64,
@@ -386,7 +299,7 @@ pub unsafe extern "C" fn rve_umat(
     if status != RveStatus::Ok && !reported {
         // Failed before the table saw the call (bad NTENS, a NULL argument, a panic).
         let message = super::last_error_message();
-        print_once(&message, &format!("mesorve UMAT: {message}"));
+        failure_once(&message, &format!("mesorve UMAT: {message}"));
         match pnewdt.as_mut() {
             Some(p) => request_step_ratio(p, FAILURE_STEP_RATIO),
             None => nan_stress(stress, ntens),
@@ -394,116 +307,9 @@ pub unsafe extern "C" fn rve_umat(
     }
 }
 
-/// `umat_` and `UMAT`: `rve_umat` under the names hosts look up (kept out of the header:
-/// a C host declares the Abaqus prototype itself).
-macro_rules! umat_alias {
-    ($name:ident) => {
-        #[allow(clippy::too_many_arguments, non_snake_case)]
-        #[no_mangle]
-        pub unsafe extern "C" fn $name(
-            stress: *mut f64,
-            statev: *mut f64,
-            ddsdde: *mut f64,
-            sse: *mut f64,
-            spd: *mut f64,
-            scd: *mut f64,
-            rpl: *mut f64,
-            ddsddt: *mut f64,
-            drplde: *mut f64,
-            drpldt: *mut f64,
-            stran: *const f64,
-            dstran: *const f64,
-            time: *const f64,
-            dtime: *const f64,
-            temp: *const f64,
-            dtemp: *const f64,
-            predef: *const f64,
-            dpred: *const f64,
-            cmname: *const c_char,
-            ndi: *const c_int,
-            nshr: *const c_int,
-            ntens: *const c_int,
-            nstatv: *const c_int,
-            props: *const f64,
-            nprops: *const c_int,
-            coords: *const f64,
-            drot: *const f64,
-            pnewdt: *mut f64,
-            celent: *const f64,
-            dfgrd0: *const f64,
-            dfgrd1: *const f64,
-            noel: *const c_int,
-            npt: *const c_int,
-            layer: *const c_int,
-            kspt: *const c_int,
-            kstep: *const c_int,
-            kinc: *const c_int,
-            cmname_len: usize,
-        ) {
-            rve_umat(
-                stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpldt, stran, dstran,
-                time, dtime, temp, dtemp, predef, dpred, cmname, ndi, nshr, ntens, nstatv, props,
-                nprops, coords, drot, pnewdt, celent, dfgrd0, dfgrd1, noel, npt, layer, kspt,
-                kstep, kinc, cmname_len,
-            )
-        }
-    };
-}
-
-umat_alias!(umat_);
-umat_alias!(UMAT);
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Numbers go, names with digits stay.
-    #[test]
-    fn numbers_are_masked_words_are_not() {
-        assert_eq!(
-            mask_numbers("E33 = -1.5e-5 (strain component 3 of NTENS = 4), gamma_13 0.25"),
-            "E33 = # (strain component # of NTENS = #), gamma_13 #"
-        );
-        assert_eq!(mask_numbers("the 2D RVE, 1e+3, x-1"), "the #D RVE, #, x-#");
-    }
-
-    /// Two points failing for the same reason (at other strains, for other materials or
-    /// names) print one line; another reason prints its own.
-    #[test]
-    fn a_reason_is_printed_once() {
-        let why = |e: f64| {
-            format!(
-                "host convention: E33 = {e:e} (strain component 3 of NTENS = 4): the 2D RVE \
-                 holds the out-of-plane strains at zero"
-            )
-        };
-        let missing = |name: &str| format!("scene `{name}` not found (searched `./{name}.toml`)");
-        let calls = [
-            ("CONCRETE", why(1.2e-5), 1, 1),
-            ("CONCRETE", why(-3.4e-6), 7, 4),
-            ("CONCRETE", "host convention: NTENS = 5".to_string(), 7, 4),
-            ("CONCRETE2", why(1.2e-5), 9, 1),
-            ("CONCRETE", why(5e-7), 300, 2),
-            ("\\x9c\\x01", missing("\\x9c\\x01"), 0, 0),
-            ("\\x13", missing("\\x13"), 0, 0),
-        ];
-        let (mut seen, mut out) = (HashSet::new(), Vec::new());
-        let printed: Vec<bool> = calls
-            .iter()
-            .map(|(material, reason, noel, npt)| {
-                let line =
-                    format!("mesorve UMAT: element {noel}, point {npt}, `{material}`: {reason}");
-                report_once(&mut seen, reason, &line, &mut out)
-            })
-            .collect();
-        assert_eq!(printed, [true, false, true, false, false, true, false]);
-        let text = String::from_utf8(out).unwrap();
-        assert_eq!(text.lines().count(), 3);
-        assert!(text.starts_with(
-            "mesorve UMAT: element 1, point 1, `CONCRETE`: host convention: E33 = 1.2e-5"
-        ));
-        assert!(text.lines().all(|l| l.ends_with(PRINTED_ONCE)));
-    }
 
     /// A host's bytes print as printable ASCII, up to the first NUL.
     #[test]

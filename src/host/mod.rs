@@ -1,6 +1,8 @@
 //! Host adaptors: how finite element codes call the RVE. Pure safe Rust over
 //! [`crate::model`] and [`crate::scene`]; `crate::ffi` exports it.
 //!
+//! - [`diagnostics`]: the library's messages on stderr, each said once per process (a
+//!   note once, a failure once per reason);
 //! - [`hypothesis`]: the one place that maps a host's stress and strain vectors (Abaqus
 //!   `NTENS` 3, 4 or 6, engineering shear) to the RVE's plane state and back, `s_zz` and
 //!   `DDSDDE` included;
@@ -12,6 +14,7 @@
 //!   reverted by the host's increments;
 //! - [`vtk_dump`]: `MESORVE_UMAT_VTK`, the RVE fields of chosen points as VTK files.
 
+pub(crate) mod diagnostics;
 pub mod hypothesis;
 pub mod material;
 pub mod mirrors;

@@ -132,13 +132,13 @@ fn log(inc: &Increment) {
     static LOG: std::sync::LazyLock<bool> =
         std::sync::LazyLock::new(|| std::env::var_os("MESORVE_SHARE_LOG").is_some());
     if *LOG && inc.solved + inc.shared > 0 {
-        eprintln!(
+        super::diagnostics::say(&format!(
             "mesorve: sharing: increment at TIME(2) = {}, DTIME = {}: {} calls solved, {} shared",
             f64::from_bits(inc.key.0),
             f64::from_bits(inc.key.1),
             inc.solved,
             inc.shared
-        );
+        ));
     }
 }
 

@@ -76,8 +76,8 @@
 //! solver's suggestion after a solver failure, [`FAILURE_STEP_RATIO`] otherwise),
 //! `DDSDDE` the elastic tangent of the material's virgin RVE (of the embedded paper RVE
 //! when the material is unknown: a scene not found, a bad name or `PROPS`), `STRESS` is
-//! left as it came, and [`UmatFailure`] says what went wrong; the C shim prints it on
-//! stderr and keeps it for `rve_last_error`.
+//! left as it came, and [`UmatFailure`] says what went wrong; the C shim keeps it for
+//! `rve_last_error` and says it on stderr once per reason ([`super::diagnostics`]).
 //!
 //! **Threads.** Distinct points may be called from several threads at once (each thread
 //! keeps one workspace per model, and its own `STATEV`-mode instances: no lock is shared
@@ -94,6 +94,7 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError, RwLock, TryLockError};
 
+use super::diagnostics::{note_once, Note};
 use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, UmatScene};
 use super::mirrors::{mirrors, mirrors_of, MIRRORS};
@@ -108,15 +109,8 @@ use crate::solver::TangentRequest;
 use crate::solver::{Answer, Integration};
 use crate::state::statev;
 
-/// Printed once per process when an increment's answer depends on its size.
-static STEP_NOTE: std::sync::Once = std::sync::Once::new();
 /// The largest `PNEWDT` asked for an increment whose error exceeds `solver.step_tolerance`.
 const TOLERANCE_CUT: f64 = 0.5;
-
-/// Printed once per process when an increment's error exceeds `solver.step_tolerance`.
-static TOLERANCE_NOTE: std::sync::Once = std::sync::Once::new();
-/// Printed once per process when a host keeps such an increment.
-static IGNORED_NOTE: std::sync::Once = std::sync::Once::new();
 
 /// `PNEWDT` after a failure other than the solver's (which suggests its own ratio).
 pub const FAILURE_STEP_RATIO: f64 = 0.25;
@@ -169,9 +163,11 @@ pub struct UmatOutputs<'a> {
     pub stress: &'a mut [f64],
     /// `DDSDDE(1:NTENS, 1:NTENS)`, column-major.
     pub ddsdde: &'a mut [f64],
-    /// `STATEV(1:NSTATV)` (mirrors only).
+    /// `STATEV(1:NSTATV)`: in `STATEV` mode the point's state then the mirrors, in table
+    /// mode the mirrors.
     pub statev: &'a mut [f64],
-    /// Written only on failure.
+    /// `PNEWDT`: lowered (never raised, see [`request_step_ratio`]) on failure and when
+    /// the increment is to be redone smaller; otherwise left as the host passed it.
     pub pnewdt: &'a mut f64,
 }
 
@@ -282,11 +278,6 @@ impl Increment {
     }
 }
 
-/// Printed once per process: a table point restarted from virgin.
-static BACKWARDS_NOTE: std::sync::Once = std::sync::Once::new();
-/// Printed once per process: a `STATEV` of format 1, without fingerprint.
-static UNVERIFIED_NOTE: std::sync::Once = std::sync::Once::new();
-
 /// Refuses a state committed at the end of another time than this increment's start
 /// (`TIME(2)`, to [`TIME_ROUNDOFF`] of the time plus the increment): a state of an earlier
 /// increment, such as the one CalculiX 2.20 hands an element re-added by `*MODEL CHANGE`.
@@ -335,13 +326,6 @@ const LOST_STATE_REMEDY: &str = ". CalculiX 2.20 writes STATEV to its restart fi
     docs/calculix.md) and run the analysis again from its start. A host that zeroes \
     STATEV on purpose to restart the point from a virgin RVE (an element re-added with \
     its state reset) sets [statev] zero_at_strain = \"virgin\" in the scene";
-/// Printed once per process: `NSTATV` too small for `STATEV` mode.
-static TABLE_NOTE: std::sync::Once = std::sync::Once::new();
-
-fn warn_once(once: &std::sync::Once, message: impl FnOnce() -> String) {
-    once.call_once(|| eprintln!("{}", message()));
-}
-
 /// One integration point.
 struct Point {
     id: u64,
@@ -429,7 +413,7 @@ impl Point {
         if let Some(prev) = self.increment.filter(|prev| inc.goes_back_from(prev)) {
             // A new analysis (or a restart) in this process: the table cannot know the
             // host's state at this time, so the point starts again from virgin.
-            warn_once(&BACKWARDS_NOTE, || {
+            note_once(Note::WentBack, || {
                 format!(
                     "mesorve: KSTEP/TIME went back from ({}, {}) to ({}, {}): points of the \
                      library's table restart from virgin RVEs (keep the state in STATEV, \
@@ -521,7 +505,7 @@ struct Failed {
 /// `solver.step_tolerance` (`relative`: its estimate over the tolerance): the host ignored
 /// the request to redo it smaller. Shared by the UMAT's table mode and `rve_commit`.
 pub fn note_ignored_redo(relative: f64) {
-    warn_once(&IGNORED_NOTE, || {
+    note_once(Note::IgnoredRedo, || {
         format!(
             "mesorve: the host kept an increment whose integration error is {relative:.3} \
              times solver.step_tolerance although it was asked to redo it smaller (PNEWDT / \
@@ -543,8 +527,8 @@ fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
         // but not below `solver.smallest_step`, where ccx would grow back into a cut.
         let ratio = ratio.min(TOLERANCE_CUT).max(r.report.smallest_ratio);
         request_step_ratio(out.pnewdt, ratio);
-        TOLERANCE_NOTE.call_once(|| {
-            eprintln!(
+        note_once(Note::Tolerance, || {
+            format!(
                 "mesorve: element {}, point {}: the increment's integration error is {:.3} \
                  times solver.step_tolerance: PNEWDT = {ratio:.3} asks for a smaller step \
                  (printed once)",
@@ -558,8 +542,8 @@ fn ask_for_smaller_step(c: &UmatCall, r: &Response, out: &mut UmatOutputs) {
         return;
     }
     request_step_ratio(out.pnewdt, ratio);
-    STEP_NOTE.call_once(|| {
-        eprintln!(
+    note_once(Note::StepSize, || {
+        format!(
             "mesorve: element {}, point {}: the RVE's answer depends on the size of this \
              increment (one step landed beyond a snap-back that half steps take; \
              solver.step_check): PNEWDT = {ratio} asks for a smaller step (printed once)",
@@ -1293,7 +1277,7 @@ fn call_strain(p: &Point, c: &UmatCall) -> crate::Result<[f64; 3]> {
 /// accepted, since an upgrade may find an analysis mid-way, but it cannot be verified to be
 /// this material's; the point's next write is verified.
 fn unverified_note(c: &UmatCall) {
-    warn_once(&UNVERIFIED_NOTE, || {
+    note_once(Note::Unverified, || {
         format!(
             "mesorve: element {}, point {}, material `{}`: STATEV written by an earlier \
              mesorve (state format 1, no fingerprint): accepted, but it cannot be verified \
@@ -1403,7 +1387,7 @@ fn start_matches(model: &crate::Model, c: &UmatCall, core: &statev::Core) -> cra
 
 /// Says once per process that `STATEV` is too short to hold the state.
 fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
-    warn_once(&TABLE_NOTE, || {
+    note_once(Note::TableMode, || {
         format!(
             "mesorve: material `{}`: NSTATV = {nstatv}, the RVE state needs {needed} \
              (*DEPVAR, `rve info`'s umat_nstatv): the state stays in the library's table, \

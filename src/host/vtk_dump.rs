@@ -49,6 +49,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Mutex, Once, PoisonError};
 
+use super::diagnostics::say;
 use super::umat::UmatCall;
 use crate::error::Error;
 use crate::model::Instance;
@@ -170,7 +171,7 @@ impl VtkDump {
             return None;
         }
         VtkDump::from_value(&value)
-            .inspect_err(|message| eprintln!("{message}"))
+            .inspect_err(|message| say(message))
             .ok()
     }
 
@@ -218,11 +219,11 @@ impl VtkDump {
         if let Err(e) = self.write(instance, c) {
             self.failures.fetch_add(1, Ordering::Relaxed);
             self.failure_note.call_once(|| {
-                eprintln!(
+                say(&format!(
                     "mesorve: {UMAT_VTK_VAR}: element {}, point {}: cannot write the RVE \
                      fields: {e}; the analysis goes on (printed once)",
                     c.noel, c.npt
-                )
+                ))
             });
         }
     }
@@ -232,13 +233,13 @@ impl VtkDump {
     fn skip(&self, c: &UmatCall) {
         self.skipped.fetch_add(1, Ordering::Relaxed);
         self.skipped_note.call_once(|| {
-            eprintln!(
+            say(&format!(
                 "mesorve: {UMAT_VTK_VAR}: element {}, point {}: with IMPL-EX an increment \
                  answered by reusing its step's factorization (unloading, closed cracks: \
                  solver.fast_path) has no RVE fluctuation to write; such increments get no \
                  file (printed once)",
                 c.noel, c.npt
-            )
+            ))
         });
     }
 

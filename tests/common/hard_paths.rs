@@ -1,4 +1,4 @@
-//! Seeded hard cases for the paper's RVE (issue 13): a microstructure, a mesh, a boundary
+//! Seeded hard cases for the paper's RVE: a microstructure, a mesh, a boundary
 //! condition, a contact penalty and a strain path a host could hand an RVE past the peak.
 //! Shared by `tests/hard_cases.rs` and `examples/hard_cases.rs`.
 #![allow(dead_code)]

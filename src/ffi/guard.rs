@@ -1,5 +1,5 @@
-//! The panic boundary, the per-thread last-error message and the pointer checks: the
-//! private helpers every exported function goes through (rustls-ffi's `panic.rs` and
+//! The guard of every entry point: the panic boundary, the per-thread last-error message
+//! and the pointer checks, the private helpers every exported function goes through (rustls-ffi's `panic.rs` and
 //! `ffi.rs`).
 
 use std::cell::RefCell;
