@@ -18,6 +18,9 @@
 //!    kept). Peak RSS, bytes per instance, `rve_state_size`, and one instance's bytes
 //!    per component (`State` fields, from the safe API driven the same way).
 
+mod common;
+use common::{load_average, peak_rss_mib};
+
 use std::ffi::CString;
 use std::process::Command;
 use std::sync::Arc;
@@ -51,25 +54,6 @@ fn trial_strain(k: usize) -> [f64; 3] {
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
-}
-
-/// `VmHWM` (peak resident set) of this process, MiB.
-fn peak_rss_mib() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    s.lines()
-        .find(|l| l.starts_with("VmHWM:"))
-        .and_then(|l| l.split_whitespace().nth(1))
-        .and_then(|v| v.parse::<f64>().ok())
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
-
-/// The 1-minute load average (`/proc/loadavg`): other processes on the machine slow
-/// the timings, and the 2-thread figures most.
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().map(str::to_string))
-        .unwrap_or_else(|| "?".into())
 }
 
 fn instances() -> usize {

@@ -26,6 +26,9 @@
 //! The main process prints the scene sizes and runs both scenes (`paper_rve.toml`,
 //! implicit, and `paper_rve_host_implex.toml`, IMPL-EX).
 
+mod common;
+use common::{load_average, peak_rss_mib};
+
 use std::ffi::c_int;
 use std::process::Command;
 use std::time::Instant;
@@ -47,22 +50,6 @@ fn points() -> usize {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(20_000)
-}
-
-fn peak_rss_mib() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    s.lines()
-        .find(|l| l.starts_with("VmHWM:"))
-        .and_then(|l| l.split_whitespace().nth(1))
-        .and_then(|v| v.parse::<f64>().ok())
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
-
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().map(str::to_string))
-        .unwrap_or_else(|| "?".into())
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
