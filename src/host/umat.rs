@@ -99,7 +99,7 @@ use super::hypothesis::{Hypothesis, PlaneResponse};
 use super::material::{Material, SearchPath, UmatScene};
 use super::mirrors::{mirrors, mirrors_of, MIRRORS};
 use super::share_table::{Anchor, IncrementKey, ShareTable, Step};
-use super::vtk_dump::{self, VtkDump};
+use super::vtk_dump::{self, DumpAt, VtkDump};
 use crate::error::Error;
 use crate::model::share;
 use crate::model::workspaces::with_workspace;
@@ -154,6 +154,19 @@ pub struct UmatCall<'a> {
     pub npt: i32,
     pub kstep: i32,
     pub kinc: i32,
+}
+
+impl UmatCall<'_> {
+    /// The call's point and increment, as the VTK dump names its files.
+    fn dump_at(&self) -> DumpAt {
+        DumpAt {
+            noel: self.noel,
+            npt: self.npt,
+            kstep: self.kstep,
+            kinc: self.kinc,
+            time_end: self.time[1] + self.dtime,
+        }
+    }
 }
 
 /// The outputs of one UMAT call.
@@ -781,7 +794,7 @@ impl Umat {
         let may_share = timed && !dumped;
         let (r, solved) = self.statev_answer(p, c, &out.statev[..n], (timed, may_share))?;
         write_outputs(p, c, &r, out, Some(n), None)?;
-        vtk_dump::at_answer(&self.vtk, &p.instance, c);
+        vtk_dump::at_answer(&self.vtk, &p.instance, &c.dump_at());
         Ok(Outcome {
             solved,
             committed: false,
@@ -823,7 +836,7 @@ impl Umat {
             with_material(e)
         })?;
         write_outputs(&p, c, &r, out, None, None).map_err(with_material)?;
-        vtk_dump::at_answer(&self.vtk, &p.instance, c);
+        vtk_dump::at_answer(&self.vtk, &p.instance, &c.dump_at());
         Ok(Outcome {
             solved,
             committed,

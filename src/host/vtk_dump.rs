@@ -50,7 +50,6 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Mutex, Once, PoisonError};
 
 use super::diagnostics::say;
-use super::umat::UmatCall;
 use crate::error::Error;
 use crate::model::Instance;
 use crate::solver::Integration;
@@ -212,7 +211,7 @@ impl VtkDump {
 
     /// After an answer of the UMAT: the fields of `instance`'s trial when the call's point
     /// is chosen. Never fails: a failure is counted and said once.
-    pub fn at_answer(&self, instance: &Instance, c: &UmatCall) {
+    pub fn at_answer(&self, instance: &Instance, c: &DumpAt) {
         if !self.chooses(c.noel, c.npt) {
             return;
         }
@@ -230,7 +229,7 @@ impl VtkDump {
 
     /// An IMPL-EX answer that reused its step's factorization (the fast path: unloading,
     /// closed cracks) holds no fluctuation to write: counted, said once.
-    fn skip(&self, c: &UmatCall) {
+    fn skip(&self, c: &DumpAt) {
         self.skipped.fetch_add(1, Ordering::Relaxed);
         self.skipped_note.call_once(|| {
             say(&format!(
@@ -243,7 +242,7 @@ impl VtkDump {
         });
     }
 
-    fn write(&self, instance: &Instance, c: &UmatCall) -> crate::Result<()> {
+    fn write(&self, instance: &Instance, c: &DumpAt) -> crate::Result<()> {
         let state = instance.trial_state().ok_or(Error::NoTrial)?;
         let increment = (c.kstep, c.kinc);
         let strain = state.strain.map(f64::to_bits);
@@ -272,9 +271,8 @@ impl VtkDump {
         rename(&part, &path)?;
         self.written.fetch_add(1, Ordering::Relaxed);
         series.last = Some((increment, strain));
-        let end = c.time[1] + c.dtime;
-        let time = if end.is_finite() {
-            end
+        let time = if c.time_end.is_finite() {
+            c.time_end
         } else {
             f64::from(c.kinc)
         };
@@ -285,10 +283,22 @@ impl VtkDump {
 }
 
 /// After an answer of the UMAT, when the switch is on (see [`VtkDump::at_answer`]).
-pub fn at_answer(dump: &Option<VtkDump>, instance: &Instance, c: &UmatCall) {
+pub fn at_answer(dump: &Option<VtkDump>, instance: &Instance, c: &DumpAt) {
     if let Some(dump) = dump {
         dump.at_answer(instance, c);
     }
+}
+
+/// Where and when an answer is written: the call's point and increment, told by the UMAT
+/// (`host::umat` builds it from its call, so this module does not import the UMAT).
+#[derive(Debug, Clone, Copy)]
+pub struct DumpAt {
+    pub noel: i32,
+    pub npt: i32,
+    pub kstep: i32,
+    pub kinc: i32,
+    /// Total time at the end of the increment, `TIME(2) + DTIME`: the `.pvd` time.
+    pub time_end: f64,
 }
 
 /// The temporary name a file is written under before its rename.
