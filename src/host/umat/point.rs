@@ -1,7 +1,7 @@
 //! One integration point: the material a host names ([`MaterialKey`]), its RVE instance,
-//! and what each mode keeps of it: the increments of table mode and the hashes and
-//! times of `STATEV` mode. Both modes lock a point of the `(NOEL, NPT)` table with
-//! [`lock`].
+//! and what each mode keeps of it: the increments of table mode ([`TableTrack`]) and the
+//! hashes and times of `STATEV` mode ([`StatevTrack`]). Both modes lock a point of the
+//! `(NOEL, NPT)` table with [`lock`].
 
 use std::sync::{Arc, Mutex, MutexGuard, TryLockError};
 
@@ -60,27 +60,46 @@ impl Increment {
     }
 }
 
-/// One integration point.
+/// One integration point: its material and RVE instance, and what each mode keeps of it.
 pub(super) struct Point {
     pub(super) id: u64,
     pub(super) key: MaterialKey,
     pub(super) material: Arc<Material>,
     pub(super) instance: Instance,
+    /// Table mode: the host's increments as the point saw them.
+    pub(super) table: TableTrack,
+    /// `STATEV` mode: which of the host's values the instance caches.
+    pub(super) statev: StatevTrack,
+}
+
+/// What table mode follows of a point (`table_mode.rs`): the increments, which commit or
+/// revert the instance's trial.
+#[derive(Default)]
+pub(super) struct TableTrack {
     /// The increment of the last call.
     pub(super) increment: Option<Increment>,
+    /// `DTIME` of the last call.
     pub(super) dtime: f64,
     /// The strain and answer of the instance's trial (`Some` exactly when it has one).
     pub(super) last: Option<([f64; 3], Response)>,
     /// The last call failed.
     pub(super) failed: bool,
-    /// `STATEV` mode: hashes ([`values_hash`](super::statev_mode::values_hash)) of the values the committed state stands
-    /// for (see [`Umat::statev_answer`](super::table::Umat::statev_answer)) and of the values written for the pending trial;
-    /// `None` in table mode and before the first call. The values themselves are not
-    /// kept: [`Point::holds_core`] and [`Point::holds_trial`] re-encode the state.
+}
+
+/// What `STATEV` mode keeps of a point (`statev_mode.rs`): which values of the host the
+/// instance's committed state and pending trial stand for; all `None` in table mode and
+/// before the first call.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct StatevTrack {
+    /// Hashes ([`values_hash`](super::statev_mode::values_hash)) of the values the
+    /// committed state stands for (see
+    /// [`Umat::statev_answer`](super::table::Umat::statev_answer)) and of the values
+    /// written for the pending trial. The values themselves are not kept:
+    /// [`Point::holds_core`] and [`Point::holds_trial`] re-encode the state.
     pub(super) core_hash: Option<u64>,
     pub(super) trial_hash: Option<u64>,
-    /// `STATEV` mode: the host's time the committed state and the pending trial were
-    /// written at the end of (`statev::Core::time`).
+    /// The host's time the committed state and the pending trial were written at the end
+    /// of (`statev::Core::time`).
     pub(super) core_time: Option<f64>,
     pub(super) trial_time: Option<f64>,
 }
@@ -93,14 +112,8 @@ impl Point {
             key,
             instance: Instance::new(material.model.clone()),
             material,
-            increment: None,
-            dtime: 0.0,
-            last: None,
-            failed: false,
-            core_hash: None,
-            trial_hash: None,
-            core_time: None,
-            trial_time: None,
+            table: TableTrack::default(),
+            statev: StatevTrack::default(),
         }
     }
 }
@@ -120,12 +133,9 @@ pub(super) fn lock<'p>(point: &'p PointRef, c: &UmatCall) -> crate::Result<Mutex
             point.clear_poison();
             let mut p = poisoned.into_inner();
             p.instance.revert();
-            p.last = None;
-            p.failed = true;
-            p.core_hash = None;
-            p.trial_hash = None;
-            p.core_time = None;
-            p.trial_time = None;
+            p.table.last = None;
+            p.table.failed = true;
+            p.statev = StatevTrack::default();
             Ok(p)
         }
     }

@@ -95,7 +95,7 @@ fn check_start_strain(p: &Point, c: &UmatCall, virgin: bool, timed: bool) -> cra
 /// (`TIME(2)`, to [`TIME_ROUNDOFF`] of the time plus the increment): a state of an earlier
 /// increment, such as the one CalculiX 2.20 hands an element re-added by `*MODEL CHANGE`.
 fn check_start_time(p: &Point, c: &UmatCall, check: bool) -> crate::Result<()> {
-    let (Some(end), true) = (p.core_time, check) else {
+    let (Some(end), true) = (p.statev.core_time, check) else {
         return Ok(());
     };
     let start = c.time[1];
@@ -247,8 +247,8 @@ impl Umat {
             return Ok(None);
         };
         p.instance.revert();
-        p.trial_hash = None;
-        p.trial_time = time;
+        p.statev.trial_hash = None;
+        p.statev.trial_time = time;
         self.shared.fetch_add(1, Ordering::Relaxed);
         Ok(Some((r, written_core)))
     }
@@ -269,13 +269,13 @@ impl Umat {
         let strain = call_strain(p, c)?;
         let model = p.material.model.clone();
         if !p.holds_core(statev) {
-            p.core_hash = None;
+            p.statev.core_hash = None;
             let implex = model.solver.integration == Integration::Implex;
             // IMPL-EX: the host kept the point's last trial, which is the state those values
             // expand to plus the step kept for carrying over (whose answers are the same
             // bit for bit): it is committed instead of rebuilt.
             if implex && p.holds_trial(statev) && p.instance.commit().is_ok() {
-                p.core_time = p.trial_time;
+                p.statev.core_time = p.statev.trial_time;
             } else {
                 let stored = statev::read(
                     statev,
@@ -287,31 +287,31 @@ impl Umat {
                     unverified_note(c);
                 }
                 let core = stored.map(|s| s.core);
-                p.core_time = core.as_ref().and_then(|c| c.time);
+                p.statev.core_time = core.as_ref().and_then(|c| c.time);
                 with_workspace(&model, |ws| p.instance.load_core(core.as_ref(), ws))?;
                 self.loads.fetch_add(1, Ordering::Relaxed);
             }
-            p.core_hash = Some(values_hash(statev));
+            p.statev.core_hash = Some(values_hash(statev));
         }
         let virgin = statev.iter().all(|&v| v == 0.0);
         check_start_strain(p, c, virgin, timed)?;
-        p.trial_hash = None;
+        p.statev.trial_hash = None;
         let request = p.material.tangent;
         let step = may_share.then(|| self.shared_step(p, c)).flatten();
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         })?;
         let mut written = vec![0.0; statev.len()];
-        p.trial_time = timed.then(|| c.time[1] + c.dtime);
+        p.statev.trial_time = timed.then(|| c.time[1] + c.dtime);
         p.write_trial(&mut written)?;
-        p.trial_hash = Some(values_hash(&written));
+        p.statev.trial_hash = Some(values_hash(&written));
         let solved = r.report.answer != Answer::Repeated;
         if let Some(step) = step {
             return Ok((r, self.step_shared(p, c, step, &r)));
         }
         if solved && timed && sharing(p).is_some() && !implex_model(p) {
             let mut trial = p.instance.trial_core()?;
-            trial.time = p.trial_time;
+            trial.time = p.statev.trial_time;
             let anchor = Anchor {
                 committed: p.instance.committed_core(),
                 strain,
@@ -413,12 +413,13 @@ fn start_matches(model: &crate::Model, c: &UmatCall, core: &statev::Core) -> cra
 
 impl Point {
     /// Whether `statev` are the values the committed state stands for: they hash as the
-    /// ones it was loaded from, and its core (at [`Point::core_time`]) encodes to them bit
-    /// for bit (values of state format 1 never do: they are expanded again).
+    /// ones it was loaded from, and its core (at
+    /// [`StatevTrack::core_time`](super::point::StatevTrack::core_time)) encodes to them
+    /// bit for bit (values of state format 1 never do: they are expanded again).
     /// All-zero values (a virgin RVE) are held by a committed state whose core is the
     /// virgin state's.
     fn holds_core(&self, statev: &[f64]) -> bool {
-        if self.core_hash != Some(values_hash(statev)) {
+        if self.statev.core_hash != Some(values_hash(statev)) {
             return false;
         }
         let committed = self.instance.committed_core();
@@ -430,21 +431,22 @@ impl Point {
             return statev::write(&virgin, sizes, fingerprint, &mut values).is_ok()
                 && encodes_to(&committed, self, None, &values);
         }
-        encodes_to(&committed, self, self.core_time, statev)
+        encodes_to(&committed, self, self.statev.core_time, statev)
     }
 
     /// Whether `statev` are the values written for the pending trial.
     fn holds_trial(&self, statev: &[f64]) -> bool {
-        self.trial_hash == Some(values_hash(statev))
+        self.statev.trial_hash == Some(values_hash(statev))
             && (self.instance.trial_core())
-                .is_ok_and(|core| encodes_to(&core, self, self.trial_time, statev))
+                .is_ok_and(|core| encodes_to(&core, self, self.statev.trial_time, statev))
     }
 
-    /// The pending trial's values (at [`Point::trial_time`]) into `out`.
+    /// The pending trial's values (at
+    /// [`StatevTrack::trial_time`](super::point::StatevTrack::trial_time)) into `out`.
     pub(super) fn write_trial(&self, out: &mut [f64]) -> crate::Result<()> {
         let model = &self.material.model;
         let mut core = self.instance.trial_core()?;
-        core.time = self.trial_time;
+        core.time = self.statev.trial_time;
         statev::write(&core, model.state_sizes(), model.fingerprint(), out)
     }
 }

@@ -77,7 +77,7 @@ impl Umat {
         self.commits.fetch_add(committed as u64, Ordering::Relaxed);
         self.reverts.fetch_add(reverted as u64, Ordering::Relaxed);
         let (r, solved) = self.answer(&mut p, c).map_err(|e| {
-            p.failed = true;
+            p.table.failed = true;
             with_material(e)
         })?;
         write_outputs(&p, c, &r, out, None, None).map_err(with_material)?;
@@ -94,7 +94,7 @@ impl Umat {
     /// it bit for bit, else a new trial (true: solved).
     fn answer(&self, p: &mut Point, c: &UmatCall) -> crate::Result<(Response, bool)> {
         let strain = call_strain(p, c)?;
-        if let Some((s, r)) = p.last {
+        if let Some((s, r)) = p.table.last {
             if s.map(f64::to_bits) == strain.map(f64::to_bits) {
                 self.repeats.fetch_add(1, Ordering::Relaxed);
                 return Ok((r, false));
@@ -106,7 +106,7 @@ impl Umat {
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         });
-        p.last = r.as_ref().ok().map(|r| (strain, *r));
+        p.table.last = r.as_ref().ok().map(|r| (strain, *r));
         Ok((r?, true))
     }
 
@@ -125,7 +125,9 @@ impl Umat {
             start: c.time[1],
         };
         let new_analysis = nstatv >= material.model.statev_len()
-            || p.increment.is_some_and(|prev| inc.goes_back_from(&prev));
+            || p.table
+                .increment
+                .is_some_and(|prev| inc.goes_back_from(&prev));
         if !new_analysis {
             return Err(Failed {
                 error: Arc::new(Error::HostConvention(format!(
@@ -147,7 +149,7 @@ impl Point {
     /// reverted).
     fn advance(&mut self, inc: Increment, dtime: f64) -> crate::Result<(bool, bool)> {
         let (mut committed, mut reverted) = (false, false);
-        if let Some(prev) = self.increment.filter(|prev| inc.goes_back_from(prev)) {
+        if let Some(prev) = self.table.increment.filter(|prev| inc.goes_back_from(prev)) {
             // A new analysis (or a restart) in this process: the table cannot know the
             // host's state at this time, so the point starts again from virgin.
             note_once(Note::WentBack, || {
@@ -159,14 +161,15 @@ impl Point {
                 )
             });
             self.instance.reset();
-            self.last = None;
-            self.increment = None;
+            self.table.last = None;
+            self.table.increment = None;
         }
-        if let Some(prev) = self.increment {
-            let advanced = inc.start - prev.start > TIME_ROUNDOFF * (prev.start.abs() + self.dtime);
+        if let Some(prev) = self.table.increment {
+            let advanced =
+                inc.start - prev.start > TIME_ROUNDOFF * (prev.start.abs() + self.table.dtime);
             let same = prev.kstep == inc.kstep && prev.kinc == inc.kinc && !advanced;
             if !same {
-                if self.last.take().is_some() {
+                if self.table.last.take().is_some() {
                     let ignored = self.instance.ignored_redos().0;
                     self.instance.commit()?;
                     committed = true;
@@ -174,15 +177,15 @@ impl Point {
                         note_ignored_redo(self.instance.ignored_redos().1);
                     }
                 }
-            } else if self.failed || dtime < self.dtime * (1.0 - TIME_ROUNDOFF) {
+            } else if self.table.failed || dtime < self.table.dtime * (1.0 - TIME_ROUNDOFF) {
                 self.instance.revert();
-                self.last = None;
+                self.table.last = None;
                 reverted = true;
             }
         }
-        self.increment = Some(inc);
-        self.dtime = dtime;
-        self.failed = false;
+        self.table.increment = Some(inc);
+        self.table.dtime = dtime;
+        self.table.failed = false;
         Ok((committed, reverted))
     }
 }
