@@ -141,10 +141,17 @@ pub(super) fn lock<'p>(point: &'p PointRef, c: &UmatCall) -> crate::Result<Mutex
     }
 }
 
-/// The call's total strain `STRAN + DSTRAN` as the RVE's, for the point's model.
+/// The call's total strain `STRAN + DSTRAN` as the RVE's, for the point's model. The
+/// lengths are `NTENS`, at most 6 (checked before a mode is chosen), so the sum is on the
+/// stack; a longer `STRAN` goes as it is to the length check of
+/// [`Hypothesis::rve_strain`](crate::host::Hypothesis::rve_strain).
 pub(super) fn call_strain(p: &Point, c: &UmatCall) -> crate::Result<[f64; 3]> {
     let h = c.hypothesis;
     h.check_model(&p.material.model)?;
-    let total: Vec<f64> = c.stran.iter().zip(c.dstran).map(|(a, b)| a + b).collect();
-    h.rve_strain(&total)
+    let mut total = [0.0; 6];
+    let n = c.stran.len().min(c.dstran.len());
+    for (t, (a, b)) in total.iter_mut().zip(c.stran.iter().zip(c.dstran)) {
+        *t = a + b;
+    }
+    h.rve_strain(total.get(..n).unwrap_or(c.stran))
 }

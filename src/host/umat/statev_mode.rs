@@ -187,7 +187,11 @@ impl Umat {
         let implex = p.material.model.solver.integration == Integration::Implex;
         if timed && !dumped && !implex {
             if let Some((r, core)) = self.shared_answer(p, c, &out.statev[..n])? {
-                write_outputs(p, c, &r, out, Some(n), Some(&core))?;
+                let model = &p.material.model;
+                with_written(n, |written| {
+                    statev::write(&core, model.state_sizes(), model.fingerprint(), written)?;
+                    write_outputs(p, c, &r, out, written, Some(&core.history))
+                })?;
                 return Ok(Outcome {
                     solved: false,
                     committed: false,
@@ -198,7 +202,10 @@ impl Umat {
         }
         let may_share = timed && !dumped;
         let (r, solved) = self.statev_answer(p, c, &out.statev[..n], (timed, may_share))?;
-        write_outputs(p, c, &r, out, Some(n), None)?;
+        with_written(n, |written| {
+            p.write_trial(written)?;
+            write_outputs(p, c, &r, out, written, None)
+        })?;
         vtk_dump::at_answer(&self.vtk, &p.instance, &c.dump_at());
         Ok(Outcome {
             solved,
@@ -301,10 +308,11 @@ impl Umat {
         let r = with_workspace(&model, |ws| {
             p.instance.update_timed(strain, c.dtime, ws, request)
         })?;
-        let mut written = vec![0.0; statev.len()];
         p.statev.trial_time = timed.then(|| c.time[1] + c.dtime);
-        p.write_trial(&mut written)?;
-        p.statev.trial_hash = Some(values_hash(&written));
+        let trial_hash = with_written(statev.len(), |written| {
+            p.write_trial(written).map(|()| values_hash(written))
+        })?;
+        p.statev.trial_hash = Some(trial_hash);
         let solved = r.report.answer != Answer::Repeated;
         if let Some(step) = step {
             return Ok((r, self.step_shared(p, c, step, &r)));
@@ -454,6 +462,21 @@ impl Point {
 thread_local! {
     /// This thread's buffer for re-encoded `STATEV` values ([`encodes_to`]).
     static VALUES: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+    /// This thread's buffer for the `STATEV` values a call writes ([`with_written`]).
+    static WRITTEN: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+}
+
+/// `f` on `len` zeros in this thread's buffer, which a call's `STATEV` values are written
+/// to before they are hashed or copied to the host: no allocation once the buffer has
+/// grown to the state's length. The buffer is taken for the duration of `f` and put back
+/// after, so a nested call (or one while the thread exits) works on a fresh one.
+fn with_written<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    let mut buffer = WRITTEN.try_with(RefCell::take).unwrap_or_default();
+    buffer.clear();
+    buffer.resize(len, 0.0);
+    let result = f(&mut buffer);
+    let _ = WRITTEN.try_with(|b| b.replace(buffer));
+    result
 }
 
 /// A hash of `values`' bits (not cryptographic: a quick filter before [`encodes_to`]).

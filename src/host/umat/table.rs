@@ -16,7 +16,6 @@ use crate::host::mirrors::{mirrors, mirrors_of};
 use crate::host::share_table::ShareTable;
 use crate::host::vtk_dump::VtkDump;
 use crate::model::Response;
-use crate::state::statev;
 
 /// The largest `PNEWDT` asked for an increment whose error exceeds `solver.step_tolerance`.
 const TOLERANCE_CUT: f64 = 0.5;
@@ -237,41 +236,34 @@ impl Umat {
     }
 }
 
-/// Writes `STRESS`, `DDSDDE` and `STATEV`: in `STATEV` mode (`Some(len)`) the trial's
-/// core (or `shared`, a core shared from another point) in `STATEV(1:len)` and the
-/// inspection mirrors ([`crate::host::mirrors`]) after it, in table mode the mirrors from
-/// `STATEV(1)`; `PNEWDT` < 1 when the answer depends on the increment's size.
+/// Writes `STRESS`, `DDSDDE` and `STATEV`: `written` in `STATEV(1:len)` (in `STATEV`
+/// mode the values of the trial's core, or of a core shared from another point, which the
+/// mode writes first; empty in table mode) and the inspection mirrors
+/// ([`crate::host::mirrors`]) after it, of the instance's trial or of `shared_history`
+/// (the shared core's history); `PNEWDT` < 1 when the answer depends on the increment's
+/// size.
 pub(super) fn write_outputs(
     p: &Point,
     c: &UmatCall,
     r: &Response,
     out: &mut UmatOutputs,
-    statev_len: Option<usize>,
-    shared: Option<&statev::Core>,
+    written: &[f64],
+    shared_history: Option<&[f64]>,
 ) -> crate::Result<()> {
     let material = &p.material;
     let plane = PlaneResponse::from(r);
     let h = c.hypothesis;
-    let mut written = vec![0.0; statev_len.unwrap_or(0)];
-    match (statev_len, shared) {
-        (None, _) => {}
-        (Some(_), None) => p.write_trial(&mut written)?,
-        (Some(_), Some(core)) => {
-            let model = &material.model;
-            statev::write(core, model.state_sizes(), model.fingerprint(), &mut written)?
-        }
-    }
     h.host_stress(&plane, out.stress)?;
     h.host_tangent(&plane, &material.elastic.tangent, out.ddsdde)?;
-    out.statev[..written.len()].copy_from_slice(&written);
+    out.statev[..written.len()].copy_from_slice(written);
     let mirrors_at = written.len();
     let room = out.statev.len() - mirrors_at;
-    let mirrors = match shared {
-        Some(core) => mirrors_of(
+    let mirrors = match shared_history {
+        Some(history) => mirrors_of(
             p.id,
             r.report.iterations,
             r.report.substeps,
-            (&material.model, &core.history),
+            (&material.model, history),
             room,
         ),
         None => mirrors(

@@ -80,7 +80,7 @@ impl Umat {
             p.table.failed = true;
             with_material(e)
         })?;
-        write_outputs(&p, c, &r, out, None, None).map_err(with_material)?;
+        write_outputs(&p, c, &r, out, &[], None).map_err(with_material)?;
         vtk_dump::at_answer(&self.vtk, &p.instance, &c.dump_at());
         Ok(Outcome {
             solved,
