@@ -3,7 +3,6 @@
 //! `table_mode.rs`.
 
 use std::sync::atomic::Ordering;
-use std::sync::Arc;
 
 use super::call::{trim, HostSignal, Outcome, UmatCall, UmatFailure, UmatOutputs};
 use super::statev_mode::slot_material;
@@ -53,17 +52,9 @@ impl Umat {
         check_lengths(c, out).map_err(plain)?;
         let material = match slot_material(self.id, c) {
             Some(m) => m,
-            None => self.material(c).map_err(|(error, first)| Failed {
-                error,
-                first,
-                material: None,
-            })?,
+            None => self.material(c).map_err(Failed::unresolved)?,
         };
-        let with_material = |e: Error| Failed {
-            error: Arc::new(e),
-            first: true,
-            material: Some(material.clone()),
-        };
+        let with_material = Failed::of(&material);
         let statev_len = material.model.statev_len();
         if in_statev_mode(c, out.statev.len(), statev_len).map_err(with_material)? {
             return self.statev_call(c, out, material, signal);

@@ -141,17 +141,9 @@ impl Umat {
         material: Arc<Material>,
         signal: HostSignal,
     ) -> Result<Outcome, Failed> {
-        let failed = |e: Error| Failed {
-            error: Arc::new(e),
-            first: true,
-            material: Some(material.clone()),
-        };
+        let failed = Failed::of(&material);
         if signal == HostSignal::Pnewdt {
-            let point = self.point(c).map_err(|(error, first)| Failed {
-                error,
-                first,
-                material: None,
-            })?;
+            let point = self.point(c).map_err(Failed::unresolved)?;
             let mut p = lock(&point, c).map_err(failed)?;
             if !Arc::ptr_eq(&p.material, &material) {
                 *p = Point::new(p.id, MaterialKey::of(c), material.clone());

@@ -33,6 +33,28 @@ pub(super) struct Failed {
     pub(super) material: Option<Arc<Material>>,
 }
 
+impl Failed {
+    /// A failure to resolve a call's material or point, as [`Umat::material`] and
+    /// [`Umat::point`] give it (the error, and whether it is reported for the first time):
+    /// no material.
+    pub(super) fn unresolved((error, first): (Arc<Error>, bool)) -> Self {
+        Failed {
+            error,
+            first,
+            material: None,
+        }
+    }
+
+    /// The failures of a call whose material is known, each reported as new.
+    pub(super) fn of(material: &Arc<Material>) -> impl Fn(Error) -> Failed + Copy + '_ {
+        |e| Failed {
+            error: Arc::new(e),
+            first: true,
+            material: Some(material.clone()),
+        }
+    }
+}
+
 /// A failure without a material.
 pub(super) fn plain(e: Error) -> Failed {
     Failed {

@@ -3,7 +3,6 @@
 //! [`crate::host::umat`]).
 
 use std::sync::atomic::Ordering;
-use std::sync::Arc;
 
 use super::call::{trim, Outcome, UmatCall, UmatOutputs};
 use super::point::{call_strain, lock, Increment, MaterialKey, Point, TIME_ROUNDOFF};
@@ -51,22 +50,14 @@ impl Umat {
         c: &UmatCall,
         out: &mut UmatOutputs,
     ) -> Result<Outcome, Failed> {
-        let point = self.point(c).map_err(|(error, first)| Failed {
-            error,
-            first,
-            material: None,
-        })?;
+        let point = self.point(c).map_err(Failed::unresolved)?;
         let mut p = lock(&point, c).map_err(plain)?;
         if !p.key.matches(c) {
             self.rebind(&mut p, c, out.statev.len())?;
         }
         p.instance.set_lean(false);
         let material = p.material.clone();
-        let with_material = |e: Error| Failed {
-            error: Arc::new(e),
-            first: true,
-            material: Some(material.clone()),
-        };
+        let with_material = Failed::of(&material);
         table_note(c, out.statev.len(), material.model.statev_len());
         let inc = Increment {
             kstep: c.kstep,
@@ -114,11 +105,7 @@ impl Umat {
     /// (`STATEV` mode, or table mode with `KSTEP`/`TIME(2)` gone back) makes it a virgin
     /// point of the call's material; otherwise the call is refused.
     fn rebind(&self, p: &mut Point, c: &UmatCall, nstatv: usize) -> Result<(), Failed> {
-        let material = self.material(c).map_err(|(error, first)| Failed {
-            error,
-            first,
-            material: None,
-        })?;
+        let material = self.material(c).map_err(Failed::unresolved)?;
         let inc = Increment {
             kstep: c.kstep,
             kinc: c.kinc,
@@ -129,15 +116,11 @@ impl Umat {
                 .increment
                 .is_some_and(|prev| inc.goes_back_from(&prev));
         if !new_analysis {
-            return Err(Failed {
-                error: Arc::new(Error::HostConvention(format!(
-                    "element {}, point {} was created for material `{}` with other PROPS \
-                     or another name; a point keeps its material within an analysis",
-                    c.noel, c.npt, p.key.cmname
-                ))),
-                first: true,
-                material: None,
-            });
+            return Err(plain(Error::HostConvention(format!(
+                "element {}, point {} was created for material `{}` with other PROPS or \
+                 another name; a point keeps its material within an analysis",
+                c.noel, c.npt, p.key.cmname
+            ))));
         }
         *p = Point::new(p.id, MaterialKey::of(c), material);
         Ok(())
