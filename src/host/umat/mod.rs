@@ -21,8 +21,8 @@
 //!   that passes `PNEWDT` (CalculiX, Abaqus) numbers its points, and the cache is its
 //!   table's point `(NOEL, NPT)`: one rebuild per point and increment. A host that does not
 //!   (Kratos, every point 0) is keyed on nothing but the values: each thread keeps a few
-//!   instances per material ([`SLOTS_PER_THREAD`](statev_mode::SLOTS_PER_THREAD)) and takes
-//!   the one that holds them, so no point shares or waits for another.
+//!   instances per material (`SLOTS_PER_THREAD`, `statev_mode.rs`) and takes the one
+//!   that holds them, so no point shares or waits for another.
 //!   `STATEV(umat_nstatv+1..+5)` receive the inspection mirrors below. A `STATEV` that is
 //!   not exactly what the library wrote (flipped bits, a changed, zeroed or truncated
 //!   entry, another model's state) fails the call with a message, and so does a valid state
@@ -100,7 +100,7 @@
 //! - `table.rs`: the table ([`Umat`], [`global`]): materials, points, counters, the answer
 //!   to a failure, the outputs both modes write;
 //! - `statev_mode.rs` and `table_mode.rs`: the two modes, as methods of [`Umat`] and
-//!   [`Point`](point::Point); neither uses the other;
+//!   `Point`; neither uses the other;
 //! - `dispatch.rs`: [`Umat::call`], which picks the mode.
 
 mod call;

@@ -91,10 +91,9 @@ pub(super) struct TableTrack {
 /// before the first call.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct StatevTrack {
-    /// Hashes ([`values_hash`](super::statev_mode::values_hash)) of the values the
-    /// committed state stands for (see
-    /// [`Umat::statev_answer`](super::table::Umat::statev_answer)) and of the values
-    /// written for the pending trial. The values themselves are not kept:
+    /// Hashes (`values_hash`, `statev_mode.rs`) of the values the committed state stands
+    /// for (see [`Umat::statev_answer`](super::table::Umat::statev_answer)) and of the
+    /// values written for the pending trial. The values themselves are not kept:
     /// [`Point::holds_core`] and [`Point::holds_trial`] re-encode the state.
     pub(super) core_hash: Option<u64>,
     pub(super) trial_hash: Option<u64>,

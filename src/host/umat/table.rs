@@ -67,7 +67,7 @@ pub(super) fn plain(e: Error) -> Failed {
 /// The table of a host's integration points.
 pub struct Umat {
     /// This table's number in the process: the key of its points in each thread's
-    /// [`SLOTS`](super::statev_mode::SLOTS).
+    /// `SLOTS` (`statev_mode.rs`).
     pub(super) id: u64,
     pub(super) search: SearchPath,
     pub(super) materials: Mutex<HashMap<MaterialKey, MaterialEntry>>,
