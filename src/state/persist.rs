@@ -453,6 +453,75 @@ mod tests {
         ));
     }
 
+    /// Formats 2-5 (main between 0.1.0 and 0.2.0; no file of them is kept): payloads laid
+    /// out as the `State` of the commits that wrote them (110eed1, af8ec98, cf941b2,
+    /// 8560fe2: strain, unknowns, `delta_max`, then the sensitivity, then the curvature),
+    /// behind a header without checksum, load with what each kept; a payload cut inside
+    /// its last field is refused.
+    #[test]
+    fn formats_2_to_5_load_with_what_each_kept() {
+        #[derive(serde::Serialize)]
+        struct Sensitivity16 {
+            valid: bool,
+            scale: [f64; 3],
+            values: Vec<i16>,
+        }
+        let s = state();
+        assert!(s.sensitivity.valid && s.curvature.valid, "a kept field is told apart");
+        let fields = bincode::serialize(&(s.strain, &s.unknowns, &s.history)).unwrap();
+        let sensitivity16 = Sensitivity16 {
+            valid: true,
+            scale: [0.5; 3],
+            values: vec![7; 21],
+        };
+        let payloads: [(u32, Vec<u8>); 4] = [
+            (2, fields.clone()),
+            (3, [fields.clone(), bincode::serialize(&sensitivity16).unwrap()].concat()),
+            (4, [fields.clone(), bincode::serialize(&s.sensitivity).unwrap()].concat()),
+            (
+                5,
+                [
+                    fields,
+                    bincode::serialize(&s.sensitivity).unwrap(),
+                    bincode::serialize(&s.curvature).unwrap(),
+                ]
+                .concat(),
+            ),
+        ];
+        let with_header = |version: u32, payload: &[u8]| {
+            let mut bytes = encode(&s, SIZES, FP).unwrap();
+            bytes.truncate(HEADER);
+            bytes[8..12].copy_from_slice(&version.to_le_bytes());
+            bytes[32..40].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+            bytes.extend_from_slice(payload);
+            bytes
+        };
+        for (version, payload) in payloads {
+            let loaded = decode(&with_header(version, &payload), SIZES, FP)
+                .unwrap_or_else(|e| panic!("format {version}: {e}"));
+            assert_eq!(loaded.strain, s.strain, "format {version}");
+            assert_eq!(loaded.unknowns, s.unknowns, "format {version}");
+            assert_eq!(loaded.history, s.history, "format {version}");
+            assert_eq!(loaded.held_contact, vec![0; s.held_contact.len()]);
+            assert!(!loaded.linear.valid && loaded.implex.previous.is_empty());
+            if version >= 4 {
+                assert_eq!(loaded.sensitivity, s.sensitivity, "format {version}");
+            } else {
+                assert!(!loaded.sensitivity.valid, "format {version}: dropped");
+            }
+            if version == 5 {
+                assert_eq!(loaded.curvature, s.curvature);
+            } else {
+                assert!(!loaded.curvature.valid, "format {version}: none kept");
+            }
+            let cut = with_header(version, &payload[..payload.len() - 1]);
+            assert!(
+                matches!(decode(&cut, SIZES, FP), Err(Error::BadState { .. })),
+                "format {version}: a cut payload"
+            );
+        }
+    }
+
     /// Format 7 (format 8 without the held contact status) loads with no point held, and
     /// a state with held points round-trips in format 8.
     #[test]
