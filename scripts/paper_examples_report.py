@@ -18,7 +18,7 @@ import sys
 import tomllib
 
 import study_provenance
-from studykit import ROOT, pct
+from studykit import COLOURS, ROOT, pct, svg_plot
 
 WORK, MD, SVG_DIR = sys.argv[1:4]
 SVG_REL = os.path.relpath(SVG_DIR, os.path.dirname(MD))
@@ -112,86 +112,20 @@ def f0(x):
 
 
 # ----------------------------------------------------------------------------- SVG
-COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#17becf"]
-
-
-def nice_step(span, n=6):
-    raw = span / n
-    mag = 10 ** math.floor(math.log10(raw))
-    for m in (1, 2, 2.5, 5, 10):
-        if raw <= m * mag:
-            return m * mag
-    return 10 * mag
-
-
-def ticks(lo, hi):
-    step = nice_step(hi - lo)
-    first, last = math.floor(lo / step + 1e-9), math.ceil(hi / step - 1e-9)
-    return [round(k * step, 12) for k in range(first, last + 1)]
 
 
 def plot(fname, title, xlabel, ylabel, series, hlines=(), marks=()):
-    """series: (label, xs, ys, dashed). hlines: (y, label). marks: (x, y, label)."""
-    W, H, L, R, T, B = 740, 420, 70, 210, 34, 48
-    xs = [x for s in series for x in s[1]] + [m[0] for m in marks]
-    ys = [y for s in series for y in s[2]] + [h[0] for h in hlines] + [m[1] for m in marks]
-    xt, yt = ticks(min(xs + [0]), max(xs + [0])), ticks(min(ys + [0]), max(ys + [0]))
-    x0, x1, y0, y1 = xt[0], xt[-1], yt[0], yt[-1]
-
-    def px(x):
-        return L + (x - x0) / (x1 - x0) * (W - L - R)
-
-    def py(y):
-        return H - B - (y - y0) / (y1 - y0) * (H - T - B)
-
-    g = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" '
-        f'viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">',
-        f'<rect width="{W}" height="{H}" fill="white"/>',
-        f'<text x="{L}" y="20" font-size="14">{title}</text>',
-    ]
-    for t in xt:
-        g.append(f'<line x1="{px(t):.1f}" y1="{T}" x2="{px(t):.1f}" y2="{H - B}" stroke="#e4e4e4"/>')
-        g.append(f'<text x="{px(t):.1f}" y="{H - B + 16}" text-anchor="middle">{t:g}</text>')
-    for t in yt:
-        g.append(f'<line x1="{L}" y1="{py(t):.1f}" x2="{W - R}" y2="{py(t):.1f}" stroke="#e4e4e4"/>')
-        g.append(f'<text x="{L - 6}" y="{py(t) + 4:.1f}" text-anchor="end">{t:g}</text>')
-    g.append(f'<rect x="{L}" y="{T}" width="{W - L - R}" height="{H - T - B}" fill="none" stroke="black"/>')
-    if x0 < 0 < x1:
-        g.append(f'<line x1="{px(0):.1f}" y1="{T}" x2="{px(0):.1f}" y2="{H - B}" stroke="#999"/>')
-    if y0 < 0 < y1:
-        g.append(f'<line x1="{L}" y1="{py(0):.1f}" x2="{W - R}" y2="{py(0):.1f}" stroke="#999"/>')
-    g.append(f'<text x="{(L + W - R) / 2}" y="{H - 10}" text-anchor="middle">{xlabel}</text>')
-    g.append(
-        f'<text x="16" y="{(T + H - B) / 2}" text-anchor="middle" '
-        f'transform="rotate(-90 16 {(T + H - B) / 2})">{ylabel}</text>'
+    """series: (label, xs, ys, dashed). hlines: (y, label). marks: (x, y, label). Drawn by
+    studykit's plotter into SVG_DIR, and linked from the report."""
+    svg_plot(
+        os.path.join(SVG_DIR, fname), title, xlabel, ylabel,
+        [
+            (label, COLOURS[k % len(COLOURS)], [(x, y, "") for x, y in zip(xs, ys)],
+             "dashed" if dashed else True, 1.8)
+            for k, (label, xs, ys, dashed) in enumerate(series)
+        ],
+        w=740, legend=210, hlines=hlines, marks=marks,
     )
-    for y, label in hlines:
-        g.append(
-            f'<line x1="{L}" y1="{py(y):.1f}" x2="{W - R}" y2="{py(y):.1f}" stroke="black" '
-            f'stroke-dasharray="2 3"/><text x="{L + 4}" y="{py(y) - 4:.1f}">{label}</text>'
-        )
-    for k, (label, sx, sy, dashed) in enumerate(series):
-        c = COLORS[k % len(COLORS)]
-        pts = " ".join(f"{px(x):.1f},{py(y):.1f}" for x, y in zip(sx, sy))
-        dash = ' stroke-dasharray="6 4"' if dashed else ""
-        g.append(f'<polyline points="{pts}" fill="none" stroke="{c}" stroke-width="1.6"{dash}/>')
-        for x, y in zip(sx, sy):
-            g.append(f'<circle cx="{px(x):.1f}" cy="{py(y):.1f}" r="1.8" fill="{c}"/>')
-        ly = T + 14 + 18 * k
-        g.append(
-            f'<line x1="{W - R + 10}" y1="{ly - 4}" x2="{W - R + 34}" y2="{ly - 4}" '
-            f'stroke="{c}" stroke-width="2"{dash}/>'
-            f'<text x="{W - R + 40}" y="{ly}">{label}</text>'
-        )
-    for x, y, label in marks:
-        g.append(
-            f'<circle cx="{px(x):.1f}" cy="{py(y):.1f}" r="4.5" fill="none" stroke="black"/>'
-            f'<text x="{px(x) + 7:.1f}" y="{py(y) - 6:.1f}" font-size="11">{label}</text>'
-        )
-    g.append("</svg>")
-    with open(os.path.join(SVG_DIR, fname), "w") as f:
-        f.write("\n".join(g) + "\n")
     w(f"![{title}]({SVG_REL}/{fname})", "")
 
 

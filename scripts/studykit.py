@@ -228,13 +228,16 @@ def ms(x):
 
 # ------------------------------------------------------------------------------ plots
 def svg_plot(path, title, xlabel, ylabel, series, logx=False, logy=False, w=640, h=420,
-             legend=160):
+             legend=160, hlines=(), marks=()):
     """series: list of (label, colour, [(x, y, point_label)], draw_line[, marker radius,
-    default 3, 0 for none])."""
+    default 3, 0 for none]); draw_line "dashed" draws it dashed. hlines: (y, label), dotted
+    lines across the plot; marks: (x, y, label), open circles with a label. A linear axis
+    whose values are all positive starts at 0 when the smallest is below 30 % of the
+    largest; the lines x = 0 and y = 0 are drawn when inside the plot."""
     ml, mr, mt, mb = 70, legend, 40, 50
     pw, ph = w - ml - mr, h - mt - mb
-    xs = [p[0] for s in series for p in s[2]]
-    ys = [p[1] for s in series for p in s[2]]
+    xs = [p[0] for s in series for p in s[2]] + [m[0] for m in marks]
+    ys = [p[1] for s in series for p in s[2]] + [m[1] for m in marks] + [y for y, _ in hlines]
     fx = (lambda v: math.log10(v)) if logx else (lambda v: v)
     fy = (lambda v: math.log10(v)) if logy else (lambda v: v)
 
@@ -281,10 +284,18 @@ def svg_plot(path, title, xlabel, ylabel, series, logx=False, logy=False, w=640,
     o.append('<text x="%d" y="%d" text-anchor="middle">%s</text>' % (ml + pw / 2, h - 10, xlabel))
     o.append('<text transform="translate(16,%d) rotate(-90)" text-anchor="middle">%s</text>'
              % (mt + ph / 2, ylabel))
+    if not logy and y0 < 0 < y1:
+        o.append('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#999"/>' % (ml, Y(0), ml + pw, Y(0)))
+    if not logx and x0 < 0 < x1:
+        o.append('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#999"/>' % (X(0), mt, X(0), mt + ph))
+    for y, label in hlines:
+        o.append('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="black" stroke-dasharray="2 3"/>'
+                 '<text x="%d" y="%.1f">%s</text>' % (ml, Y(y), ml + pw, Y(y), ml + 4, Y(y) - 4, label))
     for k, (label, colour, pts, line, *radius) in enumerate(series):
+        dash = ' stroke-dasharray="6 4"' if line == "dashed" else ""
         if line and len(pts) > 1:
-            o.append('<polyline fill="none" stroke="%s" stroke-width="1.5" points="%s"/>'
-                     % (colour, " ".join("%.1f,%.1f" % (X(p[0]), Y(p[1])) for p in pts)))
+            o.append('<polyline fill="none" stroke="%s" stroke-width="1.5"%s points="%s"/>'
+                     % (colour, dash, " ".join("%.1f,%.1f" % (X(p[0]), Y(p[1])) for p in pts)))
         for p in pts:
             if (radius or [3])[0]:
                 o.append('<circle cx="%.1f" cy="%.1f" r="%g" fill="%s"/>'
@@ -293,9 +304,13 @@ def svg_plot(path, title, xlabel, ylabel, series, logx=False, logy=False, w=640,
                 o.append('<text x="%.1f" y="%.1f" font-size="10">%s</text>'
                          % (X(p[0]) + 5, Y(p[1]) - 5, p[2]))
         ly = mt + 14 + 18 * k
-        o.append('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" stroke-width="2"/>'
-                 % (ml + pw + 10, ly - 4, ml + pw + 30, ly - 4, colour))
+        o.append('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" stroke-width="2"%s/>'
+                 % (ml + pw + 10, ly - 4, ml + pw + 30, ly - 4, colour, dash))
         o.append('<text x="%d" y="%d">%s</text>' % (ml + pw + 34, ly, label))
+    for x, y, label in marks:
+        o.append('<circle cx="%.1f" cy="%.1f" r="4.5" fill="none" stroke="black"/>'
+                 '<text x="%.1f" y="%.1f" font-size="11">%s</text>'
+                 % (X(x), Y(y), X(x) + 7, Y(y) - 6, label))
     o.append("</svg>")
     with open(path, "w") as f:
         f.write("\n".join(o) + "\n")
