@@ -281,3 +281,43 @@ fn run_set_equals_the_edited_scene() {
     std::fs::remove_dir_all(&path_dir).ok();
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `rve mesh --set` and `rve info --set` read the scene a file with the key would be:
+/// the same statistics as the edited file, and a bad key is refused as by `rve run`.
+#[test]
+fn mesh_and_info_set_equal_the_edited_scene() {
+    let (dir, edited) = edited_paper_scene("mesh_set", ("size = 0.84", "size = 1.6"));
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = rve(args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let paper = common::repo("scenes/paper_rve.toml");
+    let paper = paper.to_str().unwrap();
+    let by_file = json(&["mesh", edited.to_str().unwrap(), "--json"]);
+    let by_set = json(&["mesh", paper, "--set", "mesh.size=1.6", "--json"]);
+    let plain = json(&["mesh", paper, "--json"]);
+    for key in ["nodes", "triangles", "interface_elements"] {
+        assert_eq!(by_set[key], by_file[key], "{key}");
+    }
+    assert_ne!(
+        by_set["triangles"], plain["triangles"],
+        "the edit changes the mesh"
+    );
+    let info = json(&[
+        "info",
+        paper,
+        "--set",
+        "solver.integration=\"implex\"",
+        "--json",
+    ]);
+    assert_eq!(info["integration"], "implex");
+    let out = rve(&["info", paper, "--set", "solver.integraton=\"implex\""]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("integraton"));
+    std::fs::remove_dir_all(&dir).ok();
+}

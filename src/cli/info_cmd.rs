@@ -11,7 +11,7 @@ use rve::Integration;
 use rve::{Instance, Model, TangentRequest};
 use serde::Serialize;
 
-use super::load_scene;
+use super::load_scene_with;
 
 #[derive(Args, Debug)]
 pub struct InfoArgs {
@@ -20,6 +20,9 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    /// Set a scene key first, as `rve run --set` does (repeatable).
+    #[arg(long, value_name = "KEY=VALUE")]
+    set: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -49,7 +52,7 @@ struct Info {
 }
 
 pub fn run(args: &InfoArgs) -> Result<()> {
-    let (scene, name) = load_scene(args.scene.as_ref())?;
+    let (scene, name) = load_scene_with(args.scene.as_ref(), &args.set)?;
     let model = Arc::new(Model::from_scene(&scene)?);
     let stats = model.mesh_stats();
     let (instance_bytes, checkpoint_bytes) = loaded_instance_bytes(&model)?;

@@ -12,7 +12,7 @@ use rve::model::build_microstructure;
 use rve::MeshStats;
 use serde::Serialize;
 
-use super::load_scene;
+use super::load_scene_with;
 
 #[derive(Args, Debug)]
 pub struct MeshArgs {
@@ -27,6 +27,9 @@ pub struct MeshArgs {
     /// Write an SVG picture of the mesh (phases coloured, ITZ in red).
     #[arg(long, value_name = "FILE")]
     svg: Option<PathBuf>,
+    /// Set a scene key first, as `rve run --set` does (repeatable).
+    #[arg(long, value_name = "KEY=VALUE")]
+    set: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -57,7 +60,7 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 }
 
 pub fn run(args: &MeshArgs) -> Result<()> {
-    let (scene, name) = load_scene(args.scene.as_ref())?;
+    let (scene, name) = load_scene_with(args.scene.as_ref(), &args.set)?;
     let start = Instant::now();
     let micro = build_microstructure(&scene)?;
     let mesh_seconds = start.elapsed().as_secs_f64();
