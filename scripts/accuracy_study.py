@@ -20,7 +20,7 @@ import tempfile
 import time
 
 import study_provenance
-from studykit import COLOURS, ROOT, Runner, ms, svg_plot, write_scene
+from studykit import COLOURS, ROOT, Runner, ms, svg_plot
 
 COARSE = os.path.join(ROOT, "scenes", "paper_rve.toml")
 FINE = os.path.join(ROOT, "scenes", "paper_rve_fine.toml")
@@ -79,8 +79,7 @@ def mesh_study(R, md):
     vs = []
     for s, si in sizes:
         v = R.run("mesh_%g" % s, FINE, {"mesh.size": s, "mesh.interface_size": si})
-        st = R.mesh_stats(write_scene(FINE, {"mesh.size": s, "mesh.interface_size": si},
-                                     os.path.join(R.tmp, "m.toml")))
+        st = R.mesh_stats(FINE, {"mesh.size": s, "mesh.interface_size": si})
         v.update(size=s, isize=si, tri=st["triangles"], itz=st["interface_elements"])
         vs.append(v)
     ref = vs[REF]

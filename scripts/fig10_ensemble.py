@@ -60,9 +60,8 @@ def limit_point(rows):
 def one(variant, seed, work):
     edits = dict(VARIANTS[variant], **{"geometry.seed": seed, "path": LIMIT_PATH})
     name = f"{variant}_{seed}"
-    scene = studykit.write_scene(os.path.join(studykit.ROOT, "scenes", "paper_rve.toml"),
-                                 edits, os.path.join(work, name + ".toml"))
-    run = studykit.run_rve(scene, os.path.join(work, name))
+    scene = os.path.join(studykit.ROOT, "scenes", "paper_rve.toml")
+    run = studykit.run_rve(scene, os.path.join(work, name), edits=edits)
     if not run.rows:
         return {"variant": variant, "seed": seed, "peak": "", "strain": "",
                 "ended": "no increment: " + run.status, "seconds": f"{run.wall:.1f}"}

@@ -15,7 +15,6 @@ of response.csv summed over the path (median over repeats, as in accuracy_study.
 """
 
 import argparse
-import copy
 import json
 import math
 import os
@@ -28,7 +27,6 @@ import time
 import tomllib
 
 import study_provenance
-import studykit
 from studykit import COLOURS, ROOT, Runner, ms, svg_plot
 
 LEVELS = (1, 2, 4, 8)  # IMPL-EX at m N increments
@@ -46,31 +44,31 @@ GENERATOR = os.path.join(ROOT, "target", "implex-study", "hard-case-scenes")
 # ---------------------------------------------------------------- paths
 
 class StrainPath:
-    """A scene (a dictionary) without its `[[path]]` and the path's segments
+    """A scene file (`base`; `body`, its content) and its path's segments
     `(to, increments)`."""
 
-    def __init__(self, name, family, scene, segments, note=""):
-        scene.pop("path", None)
-        self.name, self.family, self.body, self.segments = name, family, scene, segments
+    def __init__(self, name, family, base, segments, note=""):
+        with open(base, "rb") as f:
+            self.body = tomllib.load(f)
+        self.name, self.family, self.base, self.segments = name, family, base, segments
         self.note = note
         self.n = sum(n for _, n in segments)
 
-    def scene(self, m, integration, step_tolerance=None):
-        """The scene text with every segment cut m times finer."""
-        scene = copy.deepcopy(self.body)
-        solver = scene.setdefault("solver", {})
-        solver["integration"] = integration
+    def edits(self, m, integration, step_tolerance=None):
+        """The edits (`rve run --set`) of a run of the integration with every segment cut m
+        times finer."""
+        edits = {"solver.integration": integration}
         if step_tolerance is not None:
-            solver["step_tolerance"] = float("%g" % step_tolerance)
-        scene["path"] = [{"to": [float(v) for v in to], "increments": n * m}
+            edits["solver.step_tolerance"] = float("%g" % step_tolerance)
+        edits["path"] = [{"to": [float(v) for v in to], "increments": n * m}
                          for to, n in self.segments]
-        return studykit.dump_scene(scene)
+        return edits
 
 
 def shipped(file, name, family):
-    scene = studykit.load_scene(file)
-    segs = [(p["to"], p["increments"]) for p in scene["path"]]
-    return StrainPath(name, family, scene, segs, os.path.relpath(file, ROOT))
+    with open(file, "rb") as f:
+        segs = [(p["to"], p["increments"]) for p in tomllib.load(f)["path"]]
+    return StrainPath(name, family, file, segs, os.path.relpath(file, ROOT))
 
 
 GENERATOR_MAIN = """#[path = "%s"]
@@ -134,7 +132,10 @@ def hard_cases(seeds):
         c = json.loads(line)
         segs = segments_of(c["targets"])
         assert sum(n for _, n in segs) == len(c["targets"])
-        paths.append(StrainPath("hard case %d" % c["seed"], "hard cases", tomllib.loads(c["scene"]), segs,
+        base = os.path.join(os.path.dirname(GENERATOR), "hard_case_%d.toml" % c["seed"])
+        with open(base, "w") as f:
+            f.write(c["scene"])
+        paths.append(StrainPath("hard case %d" % c["seed"], "hard cases", base, segs,
                                 "%s; %s" % (c["kind"], c["setup"])))
     return paths
 
@@ -154,16 +155,10 @@ def run_path(R, p):
     for integration, levels in (("implicit", IMPLICIT_LEVELS), ("implex", LEVELS)):
         for m in levels:
             name = "%s_%s_%d" % (slug, integration, m)
-            base = os.path.join(R.tmp, name + ".base.toml")
-            with open(base, "w") as f:
-                f.write(p.scene(m, integration))
-            runs[integration, m] = R.run(name, base, {})
+            runs[integration, m] = R.run(name, p.base, p.edits(m, integration))
     for tol in CONTROL_TOLERANCES:
         name = "%s_control_%g" % (slug, tol)
-        base = os.path.join(R.tmp, name + ".base.toml")
-        with open(base, "w") as f:
-            f.write(p.scene(1, "implex", tol))
-        runs["control", round(1e4 * tol)] = R.run(name, base, {})
+        runs["control", round(1e4 * tol)] = R.run(name, p.base, p.edits(1, "implex", tol))
     return runs
 
 
@@ -699,7 +694,7 @@ THRESHOLDS = (("l1", "stress L1", (0.05, 0.02, 0.01)), ("energy", "energy", (0.2
 
 def strain_scale(p):
     """delta_c / cell size: the strain that opens an ITZ by delta_c across the cell."""
-    scene = tomllib.loads(p.text)
+    scene = p.body
     return scene["materials"]["itz"]["delta_c"] / max(scene["cell"]["size"])
 
 

@@ -28,8 +28,7 @@ path without extension: JOB.inp, JOB.dat, JOB.time from /usr/bin/time -v) one ro
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from member_study import DAMAGED, HEADER, fail, read_dat, read_inp, seconds, time_v  # noqa: E402
+from member_study import DAMAGED, HEADER, fail, read_dat, read_inp, seconds, time_v
 
 
 def stage_stresses(path):

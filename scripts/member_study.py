@@ -45,10 +45,9 @@ import re
 import sys
 import xml.etree.ElementTree as ET
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_study import COLOURS, svg_plot  # noqa: E402
-from calculix_report import sta  # noqa: E402
-import study_provenance  # noqa: E402
+from studykit import COLOURS, svg_plot
+from calculix_report import sta
+import study_provenance
 
 DEPVAR = 795  # member_beam.py's *DEPVAR: umat_nstatv 790 + the five mirrors
 DAMAGE, OPENING = DEPVAR - 2, DEPVAR - 1  # 0-based: SDV 794 and 795

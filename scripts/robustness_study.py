@@ -118,8 +118,8 @@ def run_all(work):
     results = []
     for k, (group, label, src, law, path, n) in enumerate(sample()):
         name = f"run{k:03d}"
-        scene = studykit.write_scene(src, dict(LAWS[law], path=path), os.path.join(work, name + ".toml"))
-        res = Result(studykit.run_rve(scene, os.path.join(work, name), rve=RVE), n)
+        edits = dict(LAWS[law], path=path)
+        res = Result(studykit.run_rve(src, os.path.join(work, name), rve=RVE, edits=edits), n)
         results.append((group, label, law, res))
         verdict = "ok" if res.ok else f"fails at increment {res.done + 1}"
         print(f"{group:30} {label:16} {law:22} {res.wall:6.2f} s  {verdict}", flush=True)

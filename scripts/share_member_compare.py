@@ -9,8 +9,7 @@ import re
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
-import member_study  # noqa: E402
+import member_study
 
 STRESS = re.compile(r"\s*stresses \(.*\) for set EALL and time\s+(\S+)")
 

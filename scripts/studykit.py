@@ -1,7 +1,7 @@
 """The study toolkit: what every study script in scripts/ shares.
 
-- scenes: `load_scene`, `dump_scene`, `set_keys` (read with tomllib, edit the dictionary,
-  write it back as TOML: one scene editor for every study);
+- scenes: `set_args` (a study's edits as `rve`'s own `--set KEY=VALUE`: the one scene
+  editor, the command line's; `toml_value` writes a value);
 - running: `run_rve` (one `rve run` with its response rows, status and wall time),
   `Runner` (variants run a few times each, with median timings);
 - formatting: `pct` (a fraction as a percentage, "0.64 %"), `ms` (seconds as ms);
@@ -9,7 +9,7 @@
   interface (`main`) for scripts/paper-examples.
 
 Import it as `import studykit` from a script in scripts/ (Python puts the script's own
-folder first on the import path). Standard library only (Python 3.11+ for tomllib).
+folder first on the import path). Standard library only.
 """
 
 import csv
@@ -22,55 +22,18 @@ import statistics
 import subprocess
 import sys
 import time
-import tomllib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RVE = os.path.join(ROOT, "target", "release", "rve")
 
 
 # ------------------------------------------------------------------------------- scenes
-def load_scene(path):
-    """A scene file as a dictionary; mesh files (`file = ...`) made absolute, so that the
-    scene can be written anywhere."""
-    with open(path, "rb") as f:
-        scene = tomllib.load(f)
-    _absolutize(scene, os.path.dirname(os.path.abspath(path)))
-    return scene
-
-
-def _absolutize(node, base):
-    if isinstance(node, dict):
-        for k, v in node.items():
-            if k == "file" and isinstance(v, str) and not os.path.isabs(v):
-                node[k] = os.path.normpath(os.path.join(base, v))
-            else:
-                _absolutize(v, base)
-    elif isinstance(node, list):
-        for v in node:
-            _absolutize(v, base)
-
-
-def set_keys(scene, edits):
-    """`scene` with each dotted key of `edits` set ("geometry.seed": 11,
-    "materials.itz.penalty.lambda_p": 1e7, "path.0.increments": 40 for the first `[[path]]`,
-    "path": [{...}] for a new path). The tables on
-    the way must exist, so that a misspelt key fails here and not as a silent new key in
-    the scene; the last key may be new (a setting the scene leaves at its default)."""
-    for dotted, value in edits.items():
-        *tables, key = dotted.split(".")
-        node = scene
-        for t in tables:
-            if isinstance(node, list):  # an array of tables: "path.0.increments"
-                node = node[int(t)]
-            elif t in node:
-                node = node[t]
-            else:
-                raise KeyError(f"scene has no table `{t}` (in `{dotted}`)")
-        node[key] = value
-    return scene
-
-
-def _value(v):
+# One scene editor: `rve`'s own `--set KEY=VALUE` (docs/cli.md), which every study passes
+# its edits through, so a scene is edited as the command line edits it and no study writes
+# TOML of its own.
+def toml_value(v):
+    """A Python value as a TOML value: `0.5`, `true`, `"lu"`, `[1, 2]`, `{ to = [...] }`.
+    Floats are written with `repr`, which reads back to the same double."""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, str):
@@ -80,39 +43,18 @@ def _value(v):
     if isinstance(v, int):
         return str(v)
     if isinstance(v, list):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
     if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + " }"
+        return "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + " }"
     raise TypeError(f"no TOML value for {v!r}")
 
 
-def _is_table_array(v):
-    return isinstance(v, list) and v and all(isinstance(x, dict) for x in v)
-
-
-def dump_scene(scene):
-    """TOML text of a scene dictionary: top-level tables as `[table]` sections (nested
-    tables inline), lists of tables as `[[name]]`. Floats are written with `repr`, which
-    reads back to the same double."""
-    out = []
-    for k, v in scene.items():
-        if not isinstance(v, dict) and not _is_table_array(v):
-            out.append(f"{k} = {_value(v)}")
-    for k, v in scene.items():
-        if isinstance(v, dict):
-            out += ["", f"[{k}]"] + [f"{kk} = {_value(vv)}" for kk, vv in v.items()]
-    for k, v in scene.items():
-        if _is_table_array(v):
-            for item in v:
-                out += ["", f"[[{k}]]"] + [f"{kk} = {_value(vv)}" for kk, vv in item.items()]
-    return "\n".join(out).lstrip("\n") + "\n"
-
-
-def write_scene(base, edits, path):
-    """Writes `base` (a scene file) with `edits` (see `set_keys`) to `path`; returns path."""
-    with open(path, "w") as f:
-        f.write(dump_scene(set_keys(load_scene(base), edits)))
-    return path
+def set_args(edits):
+    """`rve`'s `--set KEY=VALUE` arguments for the dotted keys of `edits`
+    ("geometry.seed": 11, "materials.itz.penalty.lambda_p": 1e7, "path.0.increments": 40
+    for the first `[[path]]`, "path": [{...}] for a new path). Missing tables are created;
+    the scene's validation refuses a misspelt key."""
+    return [a for key, value in (edits or {}).items() for a in ("--set", f"{key}={toml_value(value)}")]
 
 
 def line_path(to, increments):
@@ -138,10 +80,11 @@ def read_response(out_dir):
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
 
 
-def run_rve(scene, out_dir, rve=RVE, extra=()):
-    """Runs `rve run SCENE --out OUT_DIR --quiet` and reads its response."""
+def run_rve(scene, out_dir, rve=RVE, extra=(), edits=None):
+    """Runs `rve run SCENE --out OUT_DIR --quiet` with `edits` set (`set_args`) and reads
+    its response."""
     t0 = time.perf_counter()
-    p = subprocess.run([rve, "run", scene, "--out", out_dir, "--quiet", *extra],
+    p = subprocess.run([rve, "run", scene, "--out", out_dir, "--quiet", *set_args(edits), *extra],
                        capture_output=True, text=True)
     wall = time.perf_counter() - t0
     lines = [line for line in p.stderr.splitlines() if line.strip()]
@@ -165,9 +108,9 @@ class Runner:
         self.increments = 0
         self.fast = 0
 
-    def mesh_stats(self, scene):
-        out = subprocess.run([self.rve, "mesh", scene, "--json"], capture_output=True,
-                             text=True, check=True).stdout
+    def mesh_stats(self, scene, edits=None):
+        out = subprocess.run([self.rve, "mesh", scene, *set_args(edits), "--json"],
+                             capture_output=True, text=True, check=True).stdout
         return json.loads(out)
 
     def run(self, name, base, edits):
@@ -176,14 +119,13 @@ class Runner:
         A run that fails (the solver gives up at some increment) is not repeated; its
         response.csv holds the increments before the failure, which are kept (`failed`
         holds the error message)."""
-        scene = write_scene(base, edits, os.path.join(self.tmp, name + ".toml"))
         totals, medians, rows, failed = [], [], None, None
         spent = 0.0
         for r in range(self.repeats):
             if r > 0 and spent > self.budget:
                 break  # expensive variant: fewer repeats keep the study within minutes
             out = os.path.join(self.tmp, "%s.%d" % (name, r))
-            run = run_rve(scene, out, rve=self.rve)
+            run = run_rve(base, out, rve=self.rve, edits=edits)
             self.wall += run.wall
             spent += run.wall
             self.count += 1
@@ -209,7 +151,7 @@ class Runner:
             if failed:
                 break
         return {
-            "name": name, "scene": scene, "rows": rows, "failed": failed,
+            "name": name, "scene": base, "edits": edits, "rows": rows, "failed": failed,
             "runs": len(totals), "total": statistics.median(totals), "total_min": min(totals),
             "total_max": max(totals), "per_inc": statistics.median(medians),
             "iterations": int(sum(r["iterations"] for r in rows)),
@@ -320,30 +262,19 @@ COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#1
 
 
 # ---------------------------------------------------------------------- shell interface
-def _parse_value(text):
-    """A TOML value given on the command line: `0.0`, `"plane_strain"`,
-    `[{to = [8e-5, 0.0, 0.0], increments = 20}]`."""
-    return tomllib.loads(f"v = {text}")["v"]
-
-
 def main(argv):
     """For shell scripts (scripts/paper-examples):
 
-    studykit.py scene SRC OUT [KEY=VALUE ...]   SRC with the dotted keys set, to OUT
-    studykit.py run NAME SCENE WORK             rve run into WORK/NAME; writes
-                                                WORK/NAME/status ("ok" or the error)
+    studykit.py run NAME SCENE WORK [KEY=VALUE ...]   rve run into WORK/NAME with each
+                                                      `--set KEY=VALUE`; writes
+                                                      WORK/NAME/status ("ok" or the error)
     """
-    if len(argv) >= 3 and argv[0] == "scene":
-        edits = {}
-        for item in argv[3:]:
-            key, _, value = item.partition("=")
-            edits[key] = _parse_value(value)
-        write_scene(argv[1], edits, argv[2])
-    elif len(argv) == 4 and argv[0] == "run":
-        name, scene, work = argv[1:]
+    if len(argv) >= 4 and argv[0] == "run":
+        name, scene, work = argv[1:4]
         out = os.path.join(work, name)
         os.makedirs(out, exist_ok=True)
-        run = run_rve(scene, out)
+        extra = [a for item in argv[4:] for a in ("--set", item)]
+        run = run_rve(scene, out, extra=extra)
         with open(os.path.join(out, "status"), "w") as f:
             f.write(run.status + "\n")
         print(f"{name:<28} {run.wall:6.2f} s  {run.status}", flush=True)
