@@ -323,7 +323,7 @@ def plots(out, sections):
     series = [("mesh.size (20 inc.)", COLOURS[0],
                [(v["total"], 100 * v["err"], "%d tri" % v["tri"]) for v in mesh_vs
                 if "err" in v and v is not mesh_ref and v["err"] > 0], True)]
-    for k, mesh in enumerate("coarse.fine"):
+    for k, mesh in enumerate(("coarse", "fine")):
         series.append(("increments, %s" % mesh, COLOURS[1 + k],
                        [(v["total"], 100 * v["err"], "n=%d" % v["n"]) for v in inc[mesh][:-1]
                         if "err" in v and v["err"] > 0], True))
