@@ -53,7 +53,7 @@ impl Umat {
         let point = self.point(c).map_err(Failed::unresolved)?;
         let mut p = lock(&point, c).map_err(plain)?;
         if !p.key.matches(c) {
-            self.rebind(&mut p, c, out.statev.len())?;
+            self.rebind(&mut p, c)?;
         }
         p.instance.set_lean(false);
         let material = p.material.clone();
@@ -102,19 +102,20 @@ impl Umat {
     }
 
     /// A point called with another material than it was created for: a new analysis
-    /// (`STATEV` mode, or table mode with `KSTEP`/`TIME(2)` gone back) makes it a virgin
-    /// point of the call's material; otherwise the call is refused.
-    fn rebind(&self, p: &mut Point, c: &UmatCall, nstatv: usize) -> Result<(), Failed> {
+    /// (`KSTEP` or `TIME(2)` gone back) makes it a virgin point of the call's material;
+    /// otherwise the call is refused. (In `STATEV` mode a point takes the material of
+    /// each call: `Umat::statev_call`.)
+    fn rebind(&self, p: &mut Point, c: &UmatCall) -> Result<(), Failed> {
         let material = self.material(c).map_err(Failed::unresolved)?;
         let inc = Increment {
             kstep: c.kstep,
             kinc: c.kinc,
             start: c.time[1],
         };
-        let new_analysis = nstatv >= material.model.statev_len()
-            || p.table
-                .increment
-                .is_some_and(|prev| inc.goes_back_from(&prev));
+        let new_analysis = p
+            .table
+            .increment
+            .is_some_and(|prev| inc.goes_back_from(&prev));
         if !new_analysis {
             return Err(plain(Error::HostConvention(format!(
                 "element {}, point {} was created for material `{}` with other PROPS or \
