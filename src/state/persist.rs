@@ -467,7 +467,10 @@ mod tests {
             values: Vec<i16>,
         }
         let s = state();
-        assert!(s.sensitivity.valid && s.curvature.valid, "a kept field is told apart");
+        assert!(
+            s.sensitivity.valid && s.curvature.valid,
+            "a kept field is told apart"
+        );
         let fields = bincode::serialize(&(s.strain, &s.unknowns, &s.history)).unwrap();
         let sensitivity16 = Sensitivity16 {
             valid: true,
@@ -476,8 +479,14 @@ mod tests {
         };
         let payloads: [(u32, Vec<u8>); 4] = [
             (2, fields.clone()),
-            (3, [fields.clone(), bincode::serialize(&sensitivity16).unwrap()].concat()),
-            (4, [fields.clone(), bincode::serialize(&s.sensitivity).unwrap()].concat()),
+            (
+                3,
+                [fields.clone(), bincode::serialize(&sensitivity16).unwrap()].concat(),
+            ),
+            (
+                4,
+                [fields.clone(), bincode::serialize(&s.sensitivity).unwrap()].concat(),
+            ),
             (
                 5,
                 [
