@@ -39,6 +39,8 @@
 //! bits and overwritten entries, the length and trailing zeros catch truncation. A state
 //! of another fingerprint is [`Error::StateOwner`].
 
+use std::cell::RefCell;
+
 use serde::{Deserialize, Serialize};
 
 use super::instance_state::held_contact_words;
@@ -172,7 +174,28 @@ pub struct Stored {
 /// Writes `core` of a model of `sizes` and `fingerprint` into `out` (zeros after it).
 /// Fails, writing nothing, when `out` is too short.
 pub fn write(core: &Core, sizes: StateSizes, fingerprint: u64, out: &mut [f64]) -> Result<()> {
-    let payload = bincode::serialize(core).map_err(|e| Error::StateEncoding {
+    let mut payload = PAYLOAD.try_with(RefCell::take).unwrap_or_default();
+    payload.clear();
+    let written = write_payload(core, sizes, fingerprint, &mut payload, out);
+    let _ = PAYLOAD.try_with(|b| b.replace(payload));
+    written
+}
+
+thread_local! {
+    /// This thread's buffer for a core's bincode bytes ([`write`] runs on every `STATEV`
+    /// call of a host: no allocation once the buffer has grown to a core's length).
+    static PAYLOAD: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+}
+
+/// [`write`] with `payload` (empty) as the buffer for the core's bytes.
+fn write_payload(
+    core: &Core,
+    sizes: StateSizes,
+    fingerprint: u64,
+    payload: &mut Vec<u8>,
+    out: &mut [f64],
+) -> Result<()> {
+    bincode::serialize_into(&mut *payload, core).map_err(|e| Error::StateEncoding {
         reason: e.to_string(),
     })?;
     if payload.len() >= PAYLOAD_LIMIT || fingerprint >> FINGERPRINT_BITS != 0 {
@@ -202,19 +225,24 @@ pub fn write(core: &Core, sizes: StateSizes, fingerprint: u64, out: &mut [f64]) 
         crc: 0,
     };
     let mut entries = header.entries();
-    entries[3] += u64::from(header.checksum(&payload));
-    out.fill(0.0);
+    entries[3] += u64::from(header.checksum(payload));
     for (o, e) in out.iter_mut().zip(entries) {
         *o = e as f64;
     }
-    for (o, chunk) in out[HEADER..]
-        .iter_mut()
-        .zip(payload.chunks(BYTES_PER_VALUE))
-    {
-        let mut bytes = [0u8; 8];
-        bytes[..chunk.len()].copy_from_slice(chunk);
-        *o = u64::from_le_bytes(bytes) as f64;
+    // Six bytes an entry; the last entry zero-padded. Values are below 2^48, so the
+    // signed conversion (one instruction) is exact.
+    let full = payload.len() / BYTES_PER_VALUE;
+    let (chunks, rest) = payload.split_at(full * BYTES_PER_VALUE);
+    let body = &mut out[HEADER..];
+    for (o, c) in body.iter_mut().zip(chunks.chunks_exact(BYTES_PER_VALUE)) {
+        *o = i64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], 0, 0]) as f64;
     }
+    if !rest.is_empty() {
+        let mut last = [0u8; 8];
+        last[..rest.len()].copy_from_slice(rest);
+        body[full] = i64::from_le_bytes(last) as f64;
+    }
+    body[used - HEADER..].fill(0.0);
     Ok(())
 }
 
@@ -343,12 +371,12 @@ impl Header {
     /// payload.
     fn checksum(&self, payload: &[u8]) -> u32 {
         let entries = self.entries();
-        let mut bytes: Vec<u8> = entries[..3].iter().flat_map(|h| h.to_le_bytes()).collect();
-        if self.fingerprint.is_some() {
-            bytes.extend_from_slice(&(entries[3] >> 32).to_le_bytes());
+        let mut bytes = [0u8; 32];
+        for (b, e) in bytes.chunks_exact_mut(8).zip(entries[..3].iter().chain([&(entries[3] >> 32)])) {
+            b.copy_from_slice(&e.to_le_bytes());
         }
-        bytes.extend_from_slice(payload);
-        crc32c::crc32c(&bytes)
+        let head = if self.fingerprint.is_some() { 32 } else { 24 };
+        crc32c::crc32c_append(crc32c::crc32c(&bytes[..head]), payload)
     }
 
     /// Refuses a state of a model of other sizes or of another fingerprint.
@@ -443,6 +471,45 @@ mod tests {
             })
         );
         assert_eq!(read(&vec![0.0; n], SIZES, 192, FP).unwrap(), None);
+    }
+
+    /// The entries as the module docs lay them out, from the core's bincode bytes, to
+    /// hold [`write`]'s packing to format 2 whatever the payload's length mod 6.
+    fn documented_entries(core: &Core, fingerprint: u64, len: usize) -> Vec<u64> {
+        let payload = bincode::serialize(core).unwrap();
+        let mut crc_input = Vec::new();
+        let head = [
+            STATEV_TAG << 16 | CORE_FORMAT_VERSION,
+            payload.len() as u64 + (fingerprint % (1 << 24) << 24),
+            (SIZES.unknowns as u64) << 24 | SIZES.history as u64,
+        ];
+        head.iter().for_each(|h| crc_input.extend(h.to_le_bytes()));
+        crc_input.extend((fingerprint >> 24).to_le_bytes());
+        crc_input.extend(&payload);
+        let mut entries = head.to_vec();
+        entries.push(u64::from(crc32c::crc32c(&crc_input)) + ((fingerprint >> 24) << 32));
+        for chunk in payload.chunks(6) {
+            let mut bytes = [0u8; 8];
+            bytes[..chunk.len()].copy_from_slice(chunk);
+            entries.push(u64::from_le_bytes(bytes));
+        }
+        entries.resize(len, 0);
+        entries
+    }
+
+    #[test]
+    fn entries_are_the_documented_layout() {
+        // Payloads of every length mod 6, each into a buffer of leftover garbage.
+        for extra in 0..6 {
+            let mut c = core();
+            c.history.truncate(192 - extra);
+            c.time = (extra % 2 == 0).then_some(2.0);
+            let n = values_needed(SIZES, 192, true) + 2;
+            let mut values = vec![7.0; n];
+            write(&c, SIZES, FP, &mut values).unwrap();
+            let got: Vec<u64> = values.iter().map(|&v| v as u64).collect();
+            assert_eq!(got, documented_entries(&c, FP, n), "payload {extra} values short");
+        }
     }
 
     #[test]

@@ -429,16 +429,16 @@ impl Point {
             let mut values = vec![0.0; statev.len()];
             let (sizes, fingerprint) = (model.state_sizes(), model.fingerprint());
             return statev::write(&virgin, sizes, fingerprint, &mut values).is_ok()
-                && encodes_to(&committed, self, None, &values);
+                && encodes_to(committed, self, None, &values);
         }
-        encodes_to(&committed, self, self.statev.core_time, statev)
+        encodes_to(committed, self, self.statev.core_time, statev)
     }
 
     /// Whether `statev` are the values written for the pending trial.
     fn holds_trial(&self, statev: &[f64]) -> bool {
         self.statev.trial_hash == Some(values_hash(statev))
             && (self.instance.trial_core())
-                .is_ok_and(|core| encodes_to(&core, self, self.statev.trial_time, statev))
+                .is_ok_and(|core| encodes_to(core, self, self.statev.trial_time, statev))
     }
 
     /// The pending trial's values (at
@@ -479,9 +479,8 @@ fn values_hash(values: &[f64]) -> u64 {
 }
 
 /// Whether `core` at `time`, encoded for point `p`'s model, is `statev` bit for bit.
-fn encodes_to(core: &statev::Core, p: &Point, time: Option<f64>, statev: &[f64]) -> bool {
+fn encodes_to(mut core: statev::Core, p: &Point, time: Option<f64>, statev: &[f64]) -> bool {
     let model = &p.material.model;
-    let mut core = core.clone();
     core.time = time;
     VALUES
         .try_with(|v| {
