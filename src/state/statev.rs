@@ -372,7 +372,10 @@ impl Header {
     fn checksum(&self, payload: &[u8]) -> u32 {
         let entries = self.entries();
         let mut bytes = [0u8; 32];
-        for (b, e) in bytes.chunks_exact_mut(8).zip(entries[..3].iter().chain([&(entries[3] >> 32)])) {
+        for (b, e) in bytes
+            .chunks_exact_mut(8)
+            .zip(entries[..3].iter().chain([&(entries[3] >> 32)]))
+        {
             b.copy_from_slice(&e.to_le_bytes());
         }
         let head = if self.fingerprint.is_some() { 32 } else { 24 };
@@ -508,7 +511,11 @@ mod tests {
             let mut values = vec![7.0; n];
             write(&c, SIZES, FP, &mut values).unwrap();
             let got: Vec<u64> = values.iter().map(|&v| v as u64).collect();
-            assert_eq!(got, documented_entries(&c, FP, n), "payload {extra} values short");
+            assert_eq!(
+                got,
+                documented_entries(&c, FP, n),
+                "payload {extra} values short"
+            );
         }
     }
 
