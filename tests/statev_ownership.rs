@@ -387,7 +387,7 @@ fn a_depvar_short_of_the_state_is_an_error_naming_the_count() {
             "NSTATV short",
             &called,
             &zeros,
-            &format!("set *DEPVAR to {n}"),
+            &format!("set *DEPVAR to at least {n}"),
         );
     }
     // Up to the mirrors' count: the library's table, as documented.

@@ -44,7 +44,8 @@ struct Info {
     instance_bytes: usize,
     /// Bytes of the checkpoint (`rve_state_save`) of that committed state.
     checkpoint_bytes: usize,
-    /// `STATEV` entries that keep the committed core in the host (`*DEPVAR`).
+    /// `STATEV` entries that keep the committed core in the host (`*DEPVAR` at least
+    /// this; + 5 for the UMAT's mirrors).
     umat_nstatv: usize,
     /// The fingerprint states of this scene carry (10 hex digits; the UMAT refuses a
     /// state of another): the scene as parsed, a Gmsh file's content, the integration.

@@ -30,7 +30,8 @@ enum Command {
     Mesh(mesh_cmd::MeshArgs),
     /// Follow the scene's strain path and write DIR/response.csv.
     Run(run_cmd::RunArgs),
-    /// Print a scene's RVE size, state bytes and umat_nstatv (the UMAT's *DEPVAR).
+    /// Print a scene's RVE size, state bytes and umat_nstatv (the UMAT's *DEPVAR: at
+    /// least umat_nstatv; umat_nstatv + 5 with the mirrors).
     Info(info_cmd::InfoArgs),
 }
 

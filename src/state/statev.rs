@@ -211,8 +211,8 @@ fn write_payload(
     if out.len() < used {
         return Err(Error::BadState {
             reason: format!(
-                "STATEV has {} entries, this state needs {used} (set *DEPVAR to `rve info`'s \
-                 umat_nstatv)",
+                "STATEV has {} entries, this state needs {used} (set *DEPVAR to at least \
+                 `rve info`'s umat_nstatv, + 5 for the UMAT's mirrors)",
                 out.len()
             ),
         });

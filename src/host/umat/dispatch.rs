@@ -99,9 +99,10 @@ fn in_statev_mode(c: &UmatCall, nstatv: usize, needed: usize) -> crate::Result<b
     }
     Err(Error::HostConvention(format!(
         "NSTATV = {nstatv}: material `{}` keeps its RVE state in STATEV(1:{needed}) (set \
-         *DEPVAR to {needed}, plus {MIRRORS} for the mirrors: `rve info`'s umat_nstatv); an \
-         NSTATV of at most {TABLE_MODE_MAX_NSTATV} keeps the state in the library's table \
-         instead",
-        trim(c.cmname)
+         *DEPVAR to at least {needed}, `rve info`'s umat_nstatv; {} with the {MIRRORS} \
+         mirrors); an NSTATV of at most {TABLE_MODE_MAX_NSTATV} keeps the state in the \
+         library's table instead",
+        trim(c.cmname),
+        needed + MIRRORS
     )))
 }

@@ -23,9 +23,10 @@ pub(super) fn table_refused(nstatv: usize, needed: usize) -> Error {
         "NSTATV = {nstatv} asks for the library's table of points, which a host without \
          PNEWDT (NULL, as Kratos passes it) cannot drive: it keys points on NOEL and NPT \
          and increments on KSTEP, KINC and TIME(2), and such a host numbers every point 0 \
-         and counts Newton iterations in KINC. Give {needed} STATEV entries (plus up to \
-         {MIRRORS} for the mirrors: `rve info`'s umat_nstatv), all zero, to keep the state \
-         in STATEV"
+         and counts Newton iterations in KINC. Give at least {needed} STATEV entries \
+         (`rve info`'s umat_nstatv; {} with the {MIRRORS} mirrors), all zero, to keep the \
+         state in STATEV",
+        needed + MIRRORS
     ))
 }
 
@@ -34,10 +35,11 @@ fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
     note_once(Note::TableMode, || {
         format!(
             "mesorve: material `{}`: NSTATV = {nstatv}, the RVE state needs {needed} \
-             (*DEPVAR, `rve info`'s umat_nstatv): the state stays in the library's table, \
-             which a restart, a second analysis or a re-added element does not carry \
-             (printed once)",
-            trim(c.cmname)
+             (*DEPVAR at least `rve info`'s umat_nstatv; {} with the {MIRRORS} mirrors): \
+             the state stays in the library's table, which a restart, a second analysis or \
+             a re-added element does not carry (printed once)",
+            trim(c.cmname),
+            needed + MIRRORS
         )
     });
 }
@@ -139,8 +141,9 @@ impl Point {
             note_once(Note::WentBack, || {
                 format!(
                     "mesorve: KSTEP/TIME went back from ({}, {}) to ({}, {}): points of the \
-                     library's table restart from virgin RVEs (keep the state in STATEV, \
-                     *DEPVAR = `rve info`'s umat_nstatv, to carry it)",
+                     library's table restart from virgin RVEs (to carry it, keep the state \
+                     in STATEV: *DEPVAR at least `rve info`'s umat_nstatv, + {MIRRORS} for \
+                     the mirrors)",
                     prev.kstep, prev.start, inc.kstep, inc.start
                 )
             });
