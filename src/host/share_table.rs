@@ -13,7 +13,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
-use crate::model::share::{self, Indicator};
+use crate::model::share::{self, Indicator, StepSignature};
 use crate::model::{Model, Response};
 use crate::state::statev::Core;
 use crate::state::LinearBranch;
@@ -32,26 +32,13 @@ pub(super) struct Anchor {
 }
 
 /// An IMPL-EX step factorized in the increment (step sharing): the committed core it was
-/// factorized from and the step (`Instance::implex_step`).
+/// factorized from, the step (`Instance::implex_step`) and what it froze.
 pub(super) struct Step {
     pub committed: Core,
     pub step: LinearBranch,
     /// The step ratio `dt / dt_n` (bits) it was factorized for.
     pub ratio: u64,
-    /// `|h|_inf` of the committed history: a first filter of the candidates.
-    norm: f64,
-}
-
-impl Step {
-    pub fn new(committed: Core, step: LinearBranch, ratio: u64) -> Self {
-        let norm = committed.history.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        Step {
-            committed,
-            step,
-            ratio,
-            norm,
-        }
-    }
+    pub signature: StepSignature,
 }
 
 /// The key of a core's discrete part (contact status, `at_start`, `dt_n`): the steps of
@@ -84,6 +71,8 @@ struct Increment {
     /// IMPL-EX steps by [`core_key`] and by [`status_key`].
     exact: HashMap<u64, Arc<Step>>,
     steps: HashMap<u64, Vec<Arc<Step>>>,
+    /// The model's [`share::secant_scale`], the unit of the steps' similarity.
+    secant_scale: f64,
     solved: u64,
     shared: u64,
 }
@@ -96,26 +85,33 @@ impl Increment {
             anchors: Vec::new(),
             exact: HashMap::new(),
             steps: HashMap::new(),
+            secant_scale: share::secant_scale(model),
             solved: 0,
             shared: 0,
         }
     }
 
-    /// The step of the same committed core, else the first whose core is within `tol`
-    /// ([`share::cores_close`]), of step ratio `ratio`.
-    fn find_step(&self, tol: f64, core: &Core, ratio: u64) -> Option<Arc<Step>> {
+    /// The step of the same committed core, else the first of the same contact status
+    /// and step ratio `ratio` whose frozen secants are within `tol` of the virgin ones of
+    /// `signature`'s ([`StepSignature::close`]).
+    fn find_step(
+        &self,
+        tol: f64,
+        (core, ratio, signature): (&Core, u64, &StepSignature),
+    ) -> Option<Arc<Step>> {
         let same = |s: &&Arc<Step>| s.ratio == ratio && s.committed == *core;
         if let Some(s) = self.exact.get(&core_key(core)).filter(same) {
             return Some(s.clone());
         }
-        let norm = core.history.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let candidates = self.steps.get(&status_key(core))?;
         candidates
             .iter()
             .find(|s| {
                 s.ratio == ratio
-                    && (norm - s.norm).abs() <= tol * s.norm.max(share::H_FLOOR)
-                    && share::cores_close(tol, core, &s.committed)
+                    && s.committed.closed == core.closed
+                    && s.committed.at_start == core.at_start
+                    && s.committed.step.to_bits() == core.step.to_bits()
+                    && signature.close(&s.signature, tol, self.secant_scale)
             })
             .cloned()
     }
@@ -221,17 +217,18 @@ impl ShareTable {
     }
 
     /// IMPL-EX step sharing: the step factorized in this increment from the committed core
-    /// `core` (bit for bit), else from a core within `tol` of it, for step ratio `ratio`
-    /// (`None`: the point factorizes its own). Counts a shared call when found.
+    /// `core` (bit for bit), else one that froze secants within `tol` of `signature` (the
+    /// core's at step ratio `ratio`; [`Increment::find_step`]) (`None`: the point
+    /// factorizes its own). Counts a shared call when found.
     pub fn follow_step(
         &self,
         model: &Arc<Model>,
         key: IncrementKey,
         tol: f64,
-        (core, ratio): (&Core, u64),
+        wanted: (&Core, u64, &StepSignature),
     ) -> Option<Arc<Step>> {
         self.with(model, key, |inc| {
-            let found = inc.find_step(tol, core, ratio)?;
+            let found = inc.find_step(tol, wanted)?;
             inc.shared += 1;
             Some(found)
         })

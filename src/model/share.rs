@@ -15,6 +15,11 @@
 //!   so do IMPL-EX's previous histories `h_{n-1}`;
 //! - the strains agree: `|eps - eps_a|_inf <= tol max(|eps_a|_inf, STRAIN_FLOOR)`.
 //!
+//! IMPL-EX step sharing in `STATEV` mode compares what the step freezes instead of the
+//! histories ([`StepSignature`]): the same contact status, `dt_n` and step ratio, and
+//! every ITZ point's frozen secant within `tol` times the virgin ITZ stiffness. No
+//! strain condition: the step is linear in the strain.
+//!
 //! **Correction.** The follower's answer is the anchor's to first order in the strain,
 //! `sigma = sigma_a + D_a (eps - eps_a)`, `s_zz = s_zz,a + d s_zz,a (eps - eps_a)`, its
 //! tangent `D_a`; its trial state is the anchor's trial moved to `eps`
@@ -123,6 +128,80 @@ pub fn cores_close(tol: f64, point: &Core, anchor: &Core) -> bool {
         && close(tol, &point.previous, &anchor.previous, H_FLOOR)
 }
 
+/// What an IMPL-EX step freezes, for step sharing in `STATEV` mode (`crate::host`): the
+/// secant `S_q` of every interface point `q` (`InterfaceLaw::frozen_secant`) at the
+/// extrapolated history `h_ex = h + r (h - h_{n-1})` of a committed core for step ratio
+/// `r`, under the core's contact status; the step's matrix is
+/// `K_ex = K_const + sum_q B_q^T S_q B_q w_q`. Entries as `f32`, point-major.
+pub struct StepSignature {
+    secants: Vec<f32>,
+    /// Mean entry: a first filter of the candidates.
+    mean: f64,
+}
+
+impl StepSignature {
+    /// The signature of `core`'s step at ratio `ratio` in `model`.
+    pub fn of(model: &Model, core: &Core, ratio: f64) -> Self {
+        let disc = &model.disc;
+        let Some(law) = disc.law.as_deref() else {
+            return StepSignature {
+                secants: Vec::new(),
+                mean: 0.0,
+            };
+        };
+        let previous = if core.previous.len() == core.history.len() {
+            &core.previous
+        } else {
+            &core.history
+        };
+        let mut extrapolated = vec![0.0; core.history.len()];
+        law.extrapolate(&core.history, previous, ratio, &mut extrapolated);
+        let secants = point_secants(model, &extrapolated, |q| core.is_closed(q));
+        let mean = secants.iter().map(|&x| f64::from(x)).sum::<f64>() / secants.len().max(1) as f64;
+        StepSignature { secants, mean }
+    }
+
+    /// Whether every entry of the two signatures is within `tol * scale`: the two steps'
+    /// matrices `K_ex` differ by at most that in every point's secant.
+    pub fn close(&self, other: &Self, tol: f64, scale: f64) -> bool {
+        let reach = tol * scale;
+        self.secants.len() == other.secants.len()
+            && (self.mean - other.mean).abs() <= reach
+            && (self.secants.iter().zip(&other.secants))
+                .all(|(&a, &b)| (f64::from(a) - f64::from(b)).abs() <= reach)
+    }
+}
+
+/// The scale of [`StepSignature::close`]: the largest entry of the virgin RVE's open
+/// secants (the ITZ's initial stiffness for the paper's law); 0 without an interface.
+pub fn secant_scale(model: &Model) -> f64 {
+    let virgin = model.new_state();
+    let secants = point_secants(model, &virgin.history, |_| false);
+    secants
+        .iter()
+        .fold(0.0f64, |m, &x| m.max(f64::from(x).abs()))
+}
+
+/// The four entries of `S_q` of every point at `history`, `closed(q)` giving the status.
+fn point_secants(model: &Model, history: &[f64], closed: impl Fn(usize) -> bool) -> Vec<f32> {
+    let disc = &model.disc;
+    let Some(law) = disc.law.as_deref() else {
+        return Vec::new();
+    };
+    let (per_point, np) = (law.history_len(), disc.points_per_interface());
+    let mut out = Vec::with_capacity(4 * np * disc.interfaces.len());
+    for (e, geometry) in disc.interfaces.iter().enumerate() {
+        for q in e * np..(e + 1) * np {
+            let h = &history[q * per_point..(q + 1) * per_point];
+            let secant = law
+                .frozen_secant(h, closed(q), geometry.length)
+                .unwrap_or_else(|| nalgebra::Matrix2::from_element(f64::NAN));
+            out.extend(secant.iter().map(|&x| x as f32));
+        }
+    }
+    out
+}
+
 /// The anchor's answer moved to `eps` to first order (see the module documentation).
 pub fn corrected(anchor: &Response, anchor_strain: &[f64; 3], eps: &[f64; 3]) -> Response {
     let d: [f64; 3] = std::array::from_fn(|i| eps[i] - anchor_strain[i]);
@@ -192,4 +271,44 @@ pub fn switched(instance: &Instance) -> bool {
 pub fn counts(reports: &[super::PointReport]) -> (usize, usize) {
     let shared = reports.iter().filter(|r| r.shared_from.is_some()).count();
     (reports.len() - shared, shared)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The IMPL-EX host scene (paper law, `delta_c` = 2e-4 mm, penalty contact).
+    fn model() -> Model {
+        let text = include_str!("../../scenes/paper_rve_host_implex.toml");
+        let scene = crate::Scene::from_toml_str(text, env!("CARGO_MANIFEST_DIR")).unwrap();
+        Model::from_scene(&scene).unwrap()
+    }
+
+    /// Step sharing compares the secants a step freezes, not the histories: two points far
+    /// into softening (histories 10 % apart, secants both near zero) match, two near the
+    /// peak (a factor 2 apart) do not, and a closed point's history does not count.
+    #[test]
+    fn step_signatures_compare_the_frozen_secants() {
+        let m = model();
+        let virgin = m.core_of(&m.new_state());
+        let scale = secant_scale(&m);
+        assert!(scale > 0.0);
+        let at = |values: &[(usize, f64)], closed: bool| {
+            let mut core = virgin.clone();
+            for &(q, h) in values {
+                core.history[q] = h;
+                if closed {
+                    core.closed[q / 64] |= 1 << (q % 64);
+                }
+            }
+            StepSignature::of(&m, &core, 1.0)
+        };
+        let base = at(&[], false);
+        assert!(base.close(&at(&[], false), 0.0, scale));
+        let (tol, peak, soft) = (0.005, 2e-4, 2e-2);
+        assert!(at(&[(3, soft)], false).close(&at(&[(3, 1.1 * soft)], false), tol, scale));
+        assert!(!at(&[(3, peak)], false).close(&at(&[(3, 2.0 * peak)], false), tol, scale));
+        assert!(!at(&[(3, peak)], false).close(&base, tol, scale));
+        assert!(at(&[(3, peak)], true).close(&at(&[(3, 2.0 * peak)], true), 0.0, scale));
+    }
 }

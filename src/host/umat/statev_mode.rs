@@ -14,7 +14,7 @@ use crate::host::diagnostics::{note_once, Note};
 use crate::host::material::Material;
 use crate::host::share_table::{Anchor, IncrementKey, Step};
 use crate::host::vtk_dump;
-use crate::model::share;
+use crate::model::share::{self, StepSignature};
 use crate::model::workspaces::with_workspace;
 use crate::model::Response;
 use crate::scene::ZeroAtStrain;
@@ -330,34 +330,35 @@ impl Umat {
     /// point), else from a core within the tolerance (another point), taken as the point's
     /// own ([`Instance::adopt_step`](crate::model::Instance::adopt_step)), so the update
     /// answers without a factorization.
-    /// `Some(committed core, shared)`: the point shares (`shared` true: a step was adopted);
-    /// `None`: no sharing (not IMPL-EX, no tolerance, or the point already holds its step).
-    fn shared_step(&self, p: &mut Point, c: &UmatCall) -> Option<(statev::Core, bool)> {
+    /// `Some`: the point shares (a step adopted or not); `None`: no sharing (not IMPL-EX,
+    /// no tolerance, or the point already holds its step).
+    fn shared_step(&self, p: &mut Point, c: &UmatCall) -> Option<StepLookup> {
         let tol = sharing(p).filter(|_| implex_model(p))?;
         let ratio = crate::solver::implex::step_ratio(p.instance.committed().implex.step, c.dtime);
-        let ratio = ratio.to_bits();
-        if p.instance.implex_step().is_some_and(|(_, r)| r == ratio) {
+        if p.instance
+            .implex_step()
+            .is_some_and(|(_, r)| r == ratio.to_bits())
+        {
             return None;
         }
         let core = p.instance.committed_core();
         let model = p.material.model.clone();
-        let found = self
-            .share
-            .follow_step(&model, increment_key(c), tol, (&core, ratio));
+        let signature = StepSignature::of(&model, &core, ratio);
+        let ratio = ratio.to_bits();
+        let found =
+            (self.share).follow_step(&model, increment_key(c), tol, (&core, ratio, &signature));
         let adopted = found.is_some_and(|s| p.instance.adopt_step(&s.step, ratio, c.dtime));
-        Some((core, adopted))
+        Some(StepLookup {
+            core,
+            signature,
+            adopted,
+        })
     }
 
     /// After an update of [`Umat::shared_step`]: counts the call, and records the step a
     /// call that factorized it solved; returns whether the call solved.
-    fn step_shared(
-        &self,
-        p: &Point,
-        c: &UmatCall,
-        (core, adopted): (statev::Core, bool),
-        r: &Response,
-    ) -> bool {
-        if adopted {
+    fn step_shared(&self, p: &Point, c: &UmatCall, lookup: StepLookup, r: &Response) -> bool {
+        if lookup.adopted {
             self.shared.fetch_add(1, Ordering::Relaxed);
             return false;
         }
@@ -370,12 +371,26 @@ impl Umat {
             return true;
         };
         if r.report.factorizations > 0 {
-            let step = Step::new(core, step.clone(), ratio);
+            let step = Step {
+                committed: lookup.core,
+                step: step.clone(),
+                ratio,
+                signature: lookup.signature,
+            };
             self.share
                 .insert_step(&p.material.model, increment_key(c), step);
         }
         r.report.answer != Answer::Repeated
     }
+}
+
+/// What [`Umat::shared_step`] looked up: the point's committed core and its step's
+/// signature (recorded with the step if the point factorizes it), and whether a step was
+/// adopted.
+struct StepLookup {
+    core: statev::Core,
+    signature: StepSignature,
+    adopted: bool,
 }
 
 /// The sharing tolerance of the point's material, when it shares: `[solver]
