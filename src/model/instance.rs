@@ -11,7 +11,7 @@ use super::rve_model::{Model, Response};
 use crate::error::{Error, Result};
 use crate::solver::{implex, Answer, Integration, TangentRequest, Workspace};
 use crate::state::persist::{self, StateSizes};
-use crate::state::{Core, State};
+use crate::state::{Core, CoreView, State};
 
 /// An RVE instance: what a host keeps per integration point.
 ///
@@ -425,13 +425,19 @@ impl Instance {
     /// keeping the state in its own variables stores after this update. `NoTrial` when
     /// there is no pending trial.
     pub fn trial_core(&self) -> Result<Core> {
+        self.trial_core_view().map(|view| view.to_core())
+    }
+
+    /// [`trial_core`](Self::trial_core) borrowing the state's buffers (no copy of the
+    /// histories: what a `STATEV` write needs).
+    pub fn trial_core_view(&self) -> Result<CoreView<'_>> {
         match (self.pending, &self.trial) {
             (Pending::Solved, _) if self.lean_core.is_some() => {
-                Ok(self.lean_core.as_deref().cloned().ok_or(Error::NoTrial)?)
+                Ok(self.lean_core.as_deref().ok_or(Error::NoTrial)?.view())
             }
-            (Pending::Solved, Some(trial)) => Ok(self.model.core_of(trial)),
+            (Pending::Solved, Some(trial)) => Ok(self.model.core_view_of(trial)),
             (Pending::Fast(strain), _) => {
-                let mut core = self.model.core_of(&self.committed);
+                let mut core = self.model.core_view_of(&self.committed);
                 core.strain = strain;
                 Ok(core)
             }
@@ -478,6 +484,11 @@ impl Instance {
     /// is committed at.
     pub fn committed_core(&self) -> Core {
         self.model.core_of(&self.committed)
+    }
+
+    /// [`committed_core`](Self::committed_core) borrowing the state's buffers.
+    pub fn committed_core_view(&self) -> CoreView<'_> {
+        self.model.core_view_of(&self.committed)
     }
 
     /// Answer sharing (`crate::model::share`): makes `anchor`'s pending trial this

@@ -17,7 +17,7 @@ use crate::solver::{
     fast_path, implex, solve_increment, step_check, Answer, IncrementReport, Integration,
     LinearSolver, Problem, Settings, TangentRequest, Workspace,
 };
-use crate::state::State;
+use crate::state::{statev, State};
 
 static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(1);
 
@@ -55,6 +55,8 @@ pub struct Model {
     /// What gives this model's states their meaning (`fingerprint`): states of another
     /// fingerprint are refused.
     pub(crate) fingerprint: u64,
+    /// `STATEV` entries a host needs for this model's state (`Model::statev_len`).
+    pub(crate) statev_len: usize,
 }
 
 impl std::fmt::Debug for Model {
@@ -111,7 +113,13 @@ impl Model {
             elastic_s_zz_tangent: [0.0; 3],
             elastic_sensitivity: Vec::new(),
             fingerprint: scene_fingerprint(scene)?,
+            statev_len: 0,
         };
+        model.statev_len = statev::values_needed(
+            model.state_sizes(),
+            model.disc.interface_points(),
+            model.solver.integration == Integration::Implex,
+        );
         // The virgin tangent: one converged "update" at zero strain.
         let mut ws = model.workspace();
         let state = model.new_state();

@@ -6,7 +6,7 @@ use super::rve_model::Model;
 use crate::error::{Error, Result};
 use crate::solver::{implex, ContactStatus, Integration, Workspace};
 use crate::state::persist::StateSizes;
-use crate::state::statev::{self, Core};
+use crate::state::statev::{Core, CoreView};
 use crate::state::{held_contact_words, State};
 
 impl Model {
@@ -23,18 +23,21 @@ impl Model {
         self.disc.interface_points()
     }
 
-    /// `STATEV` entries a host needs to keep this model's state (`statev::values_needed`).
+    /// `STATEV` entries a host needs to keep this model's state (`statev::values_needed`,
+    /// computed once when the model is built).
     pub fn statev_len(&self) -> usize {
-        statev::values_needed(
-            self.state_sizes(),
-            self.disc.interface_points(),
-            self.solver.integration == Integration::Implex,
-        )
+        self.statev_len
     }
 
     /// The committed core of `state`: strain, history, the contact status every point is
     /// in equilibrium with, and IMPL-EX's data.
     pub fn core_of(&self, state: &State) -> Core {
+        self.core_view_of(state).to_core()
+    }
+
+    /// [`core_of`](Self::core_of) borrowing the state's buffers (for [`crate::state::statev::write`]:
+    /// no copy of the histories).
+    pub fn core_view_of<'a>(&self, state: &'a State) -> CoreView<'a> {
         let points = self.disc.interface_points();
         let mut closed = vec![0u64; held_contact_words(points)];
         let mut set = |q: usize| closed[q / 64] |= 1 << (q % 64);
@@ -53,11 +56,11 @@ impl Model {
                 .filter(|&q| gaps[q] ^ state.is_held(q))
                 .for_each(set);
         }
-        Core {
+        CoreView {
             strain: state.strain,
-            history: state.history.clone(),
+            history: &state.history,
             closed,
-            previous: state.implex.previous.clone(),
+            previous: &state.implex.previous,
             step: state.implex.step,
             at_start: state.implex.at_start,
             time: None,

@@ -11,4 +11,4 @@ pub use instance_state::{held_contact_words, PathCurvature, Quantized, State};
 pub use instance_state::{ImplexHistory, Sensitivity, SENSITIVITY_BLOCK};
 pub use linear_branch::{LinearBranch, JUMP_OPERATOR_LEN};
 pub use persist::{StateSizes, STATE_FORMAT_VERSION};
-pub use statev::Core;
+pub use statev::{Core, CoreView};

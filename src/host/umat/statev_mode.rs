@@ -20,7 +20,7 @@ use crate::model::Response;
 use crate::scene::ZeroAtStrain;
 use crate::solver::TangentRequest;
 use crate::solver::{Answer, Integration};
-use crate::state::statev;
+use crate::state::statev::{self, CoreView};
 
 /// `STRAN` and the state's committed strain agree when they differ by at most this
 /// fraction of the larger of the two (infinity norms) plus [`STRAIN_MATCH_FLOOR`]. A host
@@ -181,7 +181,7 @@ impl Umat {
             if let Some((r, core)) = self.shared_answer(p, c, &out.statev[..n])? {
                 let model = &p.material.model;
                 with_written(n, |written| {
-                    statev::write(&core, model.state_sizes(), model.fingerprint(), written)?;
+                    statev::write(&core.view(), model.state_sizes(), model.fingerprint(), written)?;
                     write_outputs(p, c, &r, out, written, Some(&core.history))
                 })?;
                 return Ok(Outcome {
@@ -437,13 +437,13 @@ impl Point {
         if self.statev.core_hash != Some(values_hash(statev)) {
             return false;
         }
-        let committed = self.instance.committed_core();
+        let committed = self.instance.committed_core_view();
         if statev.iter().all(|&v| v == 0.0) {
             let model = &self.material.model;
             let virgin = model.core_of(&model.new_state());
             let mut values = vec![0.0; statev.len()];
             let (sizes, fingerprint) = (model.state_sizes(), model.fingerprint());
-            return statev::write(&virgin, sizes, fingerprint, &mut values).is_ok()
+            return statev::write(&virgin.view(), sizes, fingerprint, &mut values).is_ok()
                 && encodes_to(committed, self, None, &values);
         }
         encodes_to(committed, self, self.statev.core_time, statev)
@@ -452,7 +452,7 @@ impl Point {
     /// Whether `statev` are the values written for the pending trial.
     fn holds_trial(&self, statev: &[f64]) -> bool {
         self.statev.trial_hash == Some(values_hash(statev))
-            && (self.instance.trial_core())
+            && (self.instance.trial_core_view())
                 .is_ok_and(|core| encodes_to(core, self, self.statev.trial_time, statev))
     }
 
@@ -460,7 +460,7 @@ impl Point {
     /// [`StatevTrack::trial_time`](super::point::StatevTrack::trial_time)) into `out`.
     pub(super) fn write_trial(&self, out: &mut [f64]) -> crate::Result<()> {
         let model = &self.material.model;
-        let mut core = self.instance.trial_core()?;
+        let mut core = self.instance.trial_core_view()?;
         core.time = self.statev.trial_time;
         statev::write(&core, model.state_sizes(), model.fingerprint(), out)
     }
@@ -494,7 +494,7 @@ fn values_hash(values: &[f64]) -> u64 {
 }
 
 /// Whether `core` at `time`, encoded for point `p`'s model, is `statev` bit for bit.
-fn encodes_to(mut core: statev::Core, p: &Point, time: Option<f64>, statev: &[f64]) -> bool {
+fn encodes_to(mut core: CoreView<'_>, p: &Point, time: Option<f64>, statev: &[f64]) -> bool {
     let model = &p.material.model;
     core.time = time;
     VALUES
