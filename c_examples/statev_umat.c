@@ -2,7 +2,9 @@
  * statev_umat.c -- the UMAT in STATEV mode through rve_umat, as a host that keeps the RVE
  * state in its own state variables: NSTATV = `rve info SCENE --json`'s umat_nstatv + 3,
  * so STATEV(1:umat_nstatv) holds the RVE's committed state and the three entries after
- * it the inspection mirrors (point id, RVE Newton iterations, sub-steps).
+ * it the inspection mirrors (point id, RVE Newton iterations, sub-steps). It keeps the
+ * first three of the five mirrors (docs/guide.md's *DEPVAR rule, umat_nstatv + 5, gives
+ * all five; the library fills those NSTATV leaves room for).
  *
  * The host protocol (Abaqus/Standard, CalculiX): every call of an increment receives the
  * STATEV of the start of the increment; when the increment converges the host keeps the
