@@ -43,8 +43,8 @@ CURVE_L1, POINT_STRESS = 0.005, 0.02
 
 def stderr_text(job):
     folder = Path(job).parent
-    name = "time.txt" if (folder / "time.txt").exists() else "stderr.txt"
-    return (folder / name).read_text()
+    found = [folder / n for n in ("time.txt", "stderr.txt") if (folder / n).exists()]
+    return found[0].read_text() if found else ""
 
 
 def wall(job):
