@@ -530,7 +530,7 @@ mod tests {
         let mut crc_input = Vec::new();
         let head = [
             STATEV_TAG << 16 | CORE_FORMAT_VERSION,
-            payload.len() as u64 + (fingerprint % (1 << 24) << 24),
+            payload.len() as u64 + ((fingerprint % (1 << 24)) << 24),
             (SIZES.unknowns as u64) << 24 | SIZES.history as u64,
         ];
         head.iter().for_each(|h| crc_input.extend(h.to_le_bytes()));
@@ -559,7 +559,11 @@ mod tests {
             write(&c.view(), SIZES, FP, &mut values).unwrap();
             let got: Vec<u64> = values.iter().map(|&v| v as u64).collect();
             let view_bytes = bincode::serialize(&c.view()).unwrap();
-            assert_eq!(view_bytes, bincode::serialize(&c).unwrap(), "a view's bytes");
+            assert_eq!(
+                view_bytes,
+                bincode::serialize(&c).unwrap(),
+                "a view's bytes"
+            );
             assert_eq!(
                 got,
                 documented_entries(&c, FP, n),

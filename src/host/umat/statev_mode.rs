@@ -181,7 +181,12 @@ impl Umat {
             if let Some((r, core)) = self.shared_answer(p, c, &out.statev[..n])? {
                 let model = &p.material.model;
                 with_written(n, |written| {
-                    statev::write(&core.view(), model.state_sizes(), model.fingerprint(), written)?;
+                    statev::write(
+                        &core.view(),
+                        model.state_sizes(),
+                        model.fingerprint(),
+                        written,
+                    )?;
                     write_outputs(p, c, &r, out, written, Some(&core.history))
                 })?;
                 return Ok(Outcome {
