@@ -91,9 +91,10 @@ impl Increment {
         }
     }
 
-    /// The step of the same committed core, else the first of the same contact status
-    /// and step ratio `ratio` whose frozen secants are within `tol` of the virgin ones of
-    /// `signature`'s ([`StepSignature::close`]).
+    /// The step of the same committed core, else the first of the same contact status,
+    /// `dt_n` and step ratio `ratio` whose frozen secants are within `tol` times the virgin
+    /// ITZ stiffness of `signature`'s ([`StepSignature::close`]). The status is compared
+    /// again after the bucket: [`status_key`] is a hash.
     fn find_step(
         &self,
         tol: f64,

@@ -149,11 +149,7 @@ impl StepSignature {
                 mean: 0.0,
             };
         };
-        let previous = if core.previous.len() == core.history.len() {
-            &core.previous
-        } else {
-            &core.history
-        };
+        let previous = crate::solver::implex::extrapolated_from(&core.history, &core.previous);
         let mut extrapolated = vec![0.0; core.history.len()];
         law.extrapolate(&core.history, previous, ratio, &mut extrapolated);
         let secants = point_secants(model, &extrapolated, |q| core.is_closed(q));

@@ -71,6 +71,17 @@ pub fn step_ratio(previous: f64, dt: f64) -> f64 {
     }
 }
 
+/// The `h_{n-1}` an extrapolation from `history` uses: IMPL-EX's `previous` when it holds
+/// one value per history value, else `history` itself (before the first step nothing is
+/// extrapolated: `h_ex = h_n`).
+pub fn extrapolated_from<'a>(history: &'a [f64], previous: &'a [f64]) -> &'a [f64] {
+    if previous.len() == history.len() {
+        previous
+    } else {
+        history
+    }
+}
+
 /// The step's linear RVE from `committed` for a step `ratio` times the last: the
 /// extrapolated history (into the workspace) and the committed contact status held, `K_ex`
 /// assembled and factorized once, `X = K_ex^-1 G` solved. Returns the condensed term
@@ -84,11 +95,7 @@ pub fn factorize_step(
 ) -> Result<[f64; 9]> {
     let disc = problem.disc;
     if let Some(law) = disc.law.as_deref() {
-        let previous = if committed.implex.previous.len() == committed.history.len() {
-            &committed.implex.previous
-        } else {
-            &committed.history
-        };
+        let previous = extrapolated_from(&committed.history, &committed.implex.previous);
         law.extrapolate(&committed.history, previous, ratio, &mut ws.history_start);
         for (q, closed) in ws.contact.start.iter_mut().enumerate() {
             *closed = committed.implex.is_closed(q);
@@ -245,11 +252,7 @@ pub fn error_estimate(
     };
     let disc = problem.disc;
     let (hl, np) = (law.history_len(), disc.points_per_interface());
-    let previous = if committed.implex.previous.len() == committed.history.len() {
-        &committed.implex.previous
-    } else {
-        &committed.history
-    };
+    let previous = extrapolated_from(&committed.history, &committed.implex.previous);
     // Every law with a frozen branch keeps one value per point (the cohesive law's delta_max).
     let mut extrapolated = [0.0; 16];
     let h_ex = &mut extrapolated[..hl];
