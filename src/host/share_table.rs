@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::model::share::{self, Indicator, StepSignature};
 use crate::model::{Model, Response};
-use crate::state::statev::Core;
+use crate::state::statev::{Core, CoreView};
 use crate::state::LinearBranch;
 
 /// The increment a table belongs to: the bits of `TIME(2)` and `DTIME`, and `KSTEP`.
@@ -43,7 +43,7 @@ pub(super) struct Step {
 
 /// The key of a core's discrete part (contact status, `at_start`, `dt_n`): the steps of
 /// one key are the candidates of a core of that key.
-fn status_key(core: &Core) -> u64 {
+fn status_key(core: &CoreView<'_>) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     core.closed.hash(&mut h);
@@ -53,15 +53,31 @@ fn status_key(core: &Core) -> u64 {
 }
 
 /// The key of a whole core bit for bit (the point's own earlier calls of the increment).
-fn core_key(core: &Core) -> u64 {
+fn core_key(core: &CoreView<'_>) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     status_key(core).hash(&mut h);
     core.strain.map(f64::to_bits).hash(&mut h);
-    for v in core.history.iter().chain(&core.previous) {
+    for v in core.history.iter().chain(core.previous) {
         v.to_bits().hash(&mut h);
     }
     h.finish()
+}
+
+/// A core's [`core_key`] and [`status_key`], computed before the table is locked.
+#[derive(Clone, Copy)]
+struct Keys {
+    core: u64,
+    status: u64,
+}
+
+impl Keys {
+    fn of(core: &CoreView<'_>) -> Self {
+        Keys {
+            core: core_key(core),
+            status: status_key(core),
+        }
+    }
 }
 
 struct Increment {
@@ -98,13 +114,14 @@ impl Increment {
     fn find_step(
         &self,
         tol: f64,
-        (core, ratio, signature): (&Core, u64, &StepSignature),
+        (core, ratio, signature): (&CoreView<'_>, u64, &StepSignature),
+        keys: Keys,
     ) -> Option<Arc<Step>> {
-        let same = |s: &&Arc<Step>| s.ratio == ratio && s.committed == *core;
-        if let Some(s) = self.exact.get(&core_key(core)).filter(same) {
+        let same = |s: &&Arc<Step>| s.ratio == ratio && core.is(&s.committed);
+        if let Some(s) = self.exact.get(&keys.core).filter(same) {
             return Some(s.clone());
         }
-        let candidates = self.steps.get(&status_key(core))?;
+        let candidates = self.steps.get(&keys.status)?;
         candidates
             .iter()
             .find(|s| {
@@ -226,10 +243,11 @@ impl ShareTable {
         model: &Arc<Model>,
         key: IncrementKey,
         tol: f64,
-        wanted: (&Core, u64, &StepSignature),
+        wanted: (&CoreView<'_>, u64, &StepSignature),
     ) -> Option<Arc<Step>> {
+        let keys = Keys::of(wanted.0);
         self.with(model, key, |inc| {
-            let found = inc.find_step(tol, wanted)?;
+            let found = inc.find_step(tol, wanted, keys)?;
             inc.shared += 1;
             Some(found)
         })
@@ -238,15 +256,11 @@ impl ShareTable {
     /// Records a step factorized in the increment (a solved call).
     pub fn insert_step(&self, model: &Arc<Model>, key: IncrementKey, step: Step) {
         let step = Arc::new(step);
+        let keys = Keys::of(&step.committed.view());
         self.with(model, key, |inc| {
             inc.solved += 1;
-            inc.exact
-                .entry(core_key(&step.committed))
-                .or_insert_with(|| step.clone());
-            inc.steps
-                .entry(status_key(&step.committed))
-                .or_default()
-                .push(step);
+            inc.exact.entry(keys.core).or_insert_with(|| step.clone());
+            inc.steps.entry(keys.status).or_default().push(step);
         });
     }
 }

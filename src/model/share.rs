@@ -40,6 +40,8 @@
 //! status of an ITZ point (the follower may lie on the other side of the switch).
 
 use super::{Instance, Model, Response};
+use crate::interface::InterfaceLaw;
+use crate::state::statev::CoreView;
 use crate::state::{Core, State};
 
 /// The strain scale below which strains count as equal to within `tol` times it: a tenth
@@ -140,19 +142,15 @@ pub struct StepSignature {
 }
 
 impl StepSignature {
-    /// The signature of `core`'s step at ratio `ratio` in `model`.
-    pub fn of(model: &Model, core: &Core, ratio: f64) -> Self {
-        let disc = &model.disc;
-        let Some(law) = disc.law.as_deref() else {
-            return StepSignature {
-                secants: Vec::new(),
-                mean: 0.0,
-            };
-        };
-        let previous = crate::solver::implex::extrapolated_from(&core.history, &core.previous);
-        let mut extrapolated = vec![0.0; core.history.len()];
-        law.extrapolate(&core.history, previous, ratio, &mut extrapolated);
-        let secants = point_secants(model, &extrapolated, |q| core.is_closed(q));
+    /// The signature of `core`'s step at ratio `ratio` in `model`. Allocates its secants
+    /// alone: each point's history is extrapolated on the stack.
+    pub fn of(model: &Model, core: &CoreView<'_>, ratio: f64) -> Self {
+        let previous = crate::solver::implex::extrapolated_from(core.history, core.previous);
+        let secants = point_secants(model, |q, law, out| {
+            let range = q * out.len()..(q + 1) * out.len();
+            law.extrapolate(&core.history[range.clone()], &previous[range], ratio, out);
+            core.is_closed(q)
+        });
         let mean = secants.iter().map(|&x| f64::from(x)).sum::<f64>() / secants.len().max(1) as f64;
         StepSignature { secants, mean }
     }
@@ -172,25 +170,43 @@ impl StepSignature {
 /// secants (the ITZ's initial stiffness for the paper's law); 0 without an interface.
 pub fn secant_scale(model: &Model) -> f64 {
     let virgin = model.new_state();
-    let secants = point_secants(model, &virgin.history, |_| false);
+    let secants = point_secants(model, |q, _, out| {
+        out.copy_from_slice(&virgin.history[q * out.len()..(q + 1) * out.len()]);
+        false
+    });
     secants
         .iter()
         .fold(0.0f64, |m, &x| m.max(f64::from(x).abs()))
 }
 
-/// The four entries of `S_q` of every point at `history`, `closed(q)` giving the status.
-fn point_secants(model: &Model, history: &[f64], closed: impl Fn(usize) -> bool) -> Vec<f32> {
+/// Interface histories of at most this many values a point are formed on the stack.
+const POINT_HISTORY_MAX: usize = 8;
+
+/// The four entries of `S_q` of every point, `point(q, law, h)` writing point `q`'s
+/// history into `h` and giving its status (true: closed). Empty without an interface.
+fn point_secants(
+    model: &Model,
+    point: impl Fn(usize, &dyn InterfaceLaw, &mut [f64]) -> bool,
+) -> Vec<f32> {
     let disc = &model.disc;
     let Some(law) = disc.law.as_deref() else {
         return Vec::new();
     };
     let (per_point, np) = (law.history_len(), disc.points_per_interface());
+    let mut stack = [0.0; POINT_HISTORY_MAX];
+    let mut heap = Vec::new();
+    let h: &mut [f64] = if per_point <= POINT_HISTORY_MAX {
+        &mut stack[..per_point]
+    } else {
+        heap.resize(per_point, 0.0);
+        &mut heap
+    };
     let mut out = Vec::with_capacity(4 * np * disc.interfaces.len());
     for (e, geometry) in disc.interfaces.iter().enumerate() {
         for q in e * np..(e + 1) * np {
-            let h = &history[q * per_point..(q + 1) * per_point];
+            let closed = point(q, law, h);
             let secant = law
-                .frozen_secant(h, closed(q), geometry.length)
+                .frozen_secant(h, closed, geometry.length)
                 .unwrap_or_else(|| nalgebra::Matrix2::from_element(f64::NAN));
             out.extend(secant.iter().map(|&x| x as f32));
         }
@@ -297,7 +313,7 @@ mod tests {
                     core.closed[q / 64] |= 1 << (q % 64);
                 }
             }
-            StepSignature::of(&m, &core, 1.0)
+            StepSignature::of(&m, &core.view(), 1.0)
         };
         let base = at(&[], false);
         assert!(base.close(&at(&[], false), 0.0, scale));

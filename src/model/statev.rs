@@ -42,9 +42,13 @@ impl Model {
         let mut closed = vec![0u64; held_contact_words(points)];
         let mut set = |q: usize| closed[q / 64] |= 1 << (q % 64);
         if self.solver.integration == Integration::Implex {
-            (0..points)
-                .filter(|&q| state.implex.is_closed(q))
-                .for_each(set);
+            // The same bit layout: the words, without bits past the last point.
+            for (word, &status) in closed.iter_mut().zip(&state.implex.closed) {
+                *word = status;
+            }
+            if let (Some(last), 1..) = (closed.last_mut(), points % 64) {
+                *last &= (1 << (points % 64)) - 1;
+            }
         } else if state.linear.valid {
             // Unknowns may be lazy (fast path): the branch set's status is the state's.
             let status = state.linear.closed.iter().enumerate();

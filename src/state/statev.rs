@@ -86,10 +86,9 @@ pub struct Core {
     pub time: Option<f64>,
 }
 
-/// A [`Core`] borrowing its buffers, serialized to the same bytes (bincode writes a slice
-/// as it writes a `Vec`): what [`write`] encodes, so that a state's core is written
-/// without copying its histories.
-#[derive(Clone, Debug, Serialize)]
+/// A [`Core`] borrowing its buffers, encoded to the same bytes ([`encode_payload`]): what
+/// [`write`] encodes, so that a state's core is written without copying its histories.
+#[derive(Clone, Debug)]
 pub struct CoreView<'a> {
     pub strain: [f64; 3],
     pub history: &'a [f64],
@@ -101,6 +100,22 @@ pub struct CoreView<'a> {
 }
 
 impl CoreView<'_> {
+    /// Whether point `point` is closed.
+    pub fn is_closed(&self, point: usize) -> bool {
+        closed_bit(&self.closed, point)
+    }
+
+    /// Whether `core` is this core, field by field (as `Core`'s `==`).
+    pub fn is(&self, core: &Core) -> bool {
+        self.strain == core.strain
+            && *self.history == *core.history
+            && self.closed == core.closed
+            && *self.previous == *core.previous
+            && self.step == core.step
+            && self.at_start == core.at_start
+            && self.time == core.time
+    }
+
     /// The owned core.
     pub fn to_core(&self) -> Core {
         Core {
@@ -163,9 +178,7 @@ impl Core {
 
     /// Whether point `point` is closed.
     pub fn is_closed(&self, point: usize) -> bool {
-        self.closed
-            .get(point / 64)
-            .is_some_and(|w| w >> (point % 64) & 1 == 1)
+        closed_bit(&self.closed, point)
     }
 
     /// Whether the buffers fit a model of `sizes` with `points` interface points and hold
@@ -186,6 +199,13 @@ impl Core {
                 .chain(&self.previous)
                 .all(|v| v.is_finite())
     }
+}
+
+/// Bit `point` of contact status words (1: closed).
+fn closed_bit(words: &[u64], point: usize) -> bool {
+    words
+        .get(point / 64)
+        .is_some_and(|w| w >> (point % 64) & 1 == 1)
 }
 
 /// `STATEV` entries a model of `sizes` with `points` interface points needs for its
@@ -228,6 +248,36 @@ pub fn write(
     written
 }
 
+/// Appends bincode 1's bytes of the [`Core`] `core` views to `payload` (its default
+/// options: fixed-width little-endian integers, `u64` lengths before a sequence, a `u8`
+/// before an `Option`'s value), written slice by slice without serde. [`read`] decodes
+/// them with bincode; a test holds the two to the same bytes.
+fn encode_payload(core: &CoreView<'_>, payload: &mut Vec<u8>) {
+    fn words<const N: usize>(
+        payload: &mut Vec<u8>,
+        values: impl ExactSizeIterator<Item = [u8; N]>,
+    ) {
+        payload.extend((values.len() as u64).to_le_bytes());
+        payload.reserve(N * values.len());
+        values.for_each(|v| payload.extend_from_slice(&v));
+    }
+    core.strain
+        .iter()
+        .for_each(|v| payload.extend(v.to_le_bytes()));
+    words(payload, core.history.iter().map(|v| v.to_le_bytes()));
+    words(payload, core.closed.iter().map(|v| v.to_le_bytes()));
+    words(payload, core.previous.iter().map(|v| v.to_le_bytes()));
+    payload.extend(core.step.to_le_bytes());
+    payload.push(u8::from(core.at_start));
+    match core.time {
+        None => payload.push(0),
+        Some(t) => {
+            payload.push(1);
+            payload.extend(t.to_le_bytes());
+        }
+    }
+}
+
 thread_local! {
     /// This thread's buffer for a core's bincode bytes ([`write`] runs on every `STATEV`
     /// call of a host: no allocation once the buffer has grown to a core's length).
@@ -242,9 +292,7 @@ fn write_payload(
     payload: &mut Vec<u8>,
     out: &mut [f64],
 ) -> Result<()> {
-    bincode::serialize_into(&mut *payload, core).map_err(|e| Error::StateEncoding {
-        reason: e.to_string(),
-    })?;
+    encode_payload(core, payload);
     if payload.len() >= PAYLOAD_LIMIT || fingerprint >> FINGERPRINT_BITS != 0 {
         return Err(Error::StateEncoding {
             reason: format!(
@@ -554,11 +602,15 @@ mod tests {
             let mut c = core();
             c.history.truncate(192 - extra);
             c.time = (extra % 2 == 0).then_some(2.0);
+            if extra == 3 {
+                c.previous.clear(); // implicit integration
+            }
             let n = values_needed(SIZES, 192, true) + 2;
             let mut values = vec![7.0; n];
             write(&c.view(), SIZES, FP, &mut values).unwrap();
             let got: Vec<u64> = values.iter().map(|&v| v as u64).collect();
-            let view_bytes = bincode::serialize(&c.view()).unwrap();
+            let mut view_bytes = Vec::new();
+            encode_payload(&c.view(), &mut view_bytes);
             assert_eq!(
                 view_bytes,
                 bincode::serialize(&c).unwrap(),

@@ -346,18 +346,14 @@ impl Umat {
         {
             return None;
         }
-        let core = p.instance.committed_core();
         let model = p.material.model.clone();
+        let core = p.instance.committed_core_view();
         let signature = StepSignature::of(&model, &core, ratio);
         let ratio = ratio.to_bits();
         let found =
             (self.share).follow_step(&model, increment_key(c), tol, (&core, ratio, &signature));
         let adopted = found.is_some_and(|s| p.instance.adopt_step(&s.step, ratio, c.dtime));
-        Some(StepLookup {
-            core,
-            signature,
-            adopted,
-        })
+        Some(StepLookup { signature, adopted })
     }
 
     /// After an update of [`Umat::shared_step`]: counts the call, and records the step a
@@ -376,8 +372,9 @@ impl Umat {
             return true;
         };
         if r.report.factorizations > 0 {
+            // The update left the committed state as the lookup saw it.
             let step = Step {
-                committed: lookup.core,
+                committed: p.instance.committed_core(),
                 step: step.clone(),
                 ratio,
                 signature: lookup.signature,
@@ -389,11 +386,10 @@ impl Umat {
     }
 }
 
-/// What [`Umat::shared_step`] looked up: the point's committed core and its step's
-/// signature (recorded with the step if the point factorizes it), and whether a step was
+/// What [`Umat::shared_step`] looked up: the signature of the point's step (recorded with
+/// the step and the committed core if the point factorizes it), and whether a step was
 /// adopted.
 struct StepLookup {
-    core: statev::Core,
     signature: StepSignature,
     adopted: bool,
 }
