@@ -443,6 +443,35 @@ impl InterfaceLaw for CohesiveLaw {
         }
     }
 
+    /// `delta_max` of [`CohesiveLaw::evaluate_as`]'s branches without their tractions:
+    /// unchanged on a closed point of the penalty law, else the larger of `delta_max` and
+    /// the effective opening (of the sliding alone on a closed point of the cohesive shear
+    /// law), formed as `open` forms them.
+    fn trial_history_as(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        _length: f64,
+        closed: bool,
+    ) {
+        let [ds, dn] = jump;
+        let delta_max = committed[0];
+        let opening = if !self.contact || !(closed || dn < 0.0) {
+            (self.beta * ds).hypot(dn)
+        } else if closed && self.contact_shear == ContactShear::Penalty {
+            trial[0] = delta_max;
+            return;
+        } else {
+            (self.beta * ds).hypot(0.0)
+        };
+        trial[0] = if opening >= delta_max {
+            opening
+        } else {
+            delta_max
+        };
+    }
+
     /// A point passes the peak of the envelope when its `delta_max` crosses `delta_c`.
     fn passes_peak(&self, start: &[f64], trial: &[f64]) -> bool {
         trial[0] >= self.delta_c && start[0] < self.delta_c
@@ -630,6 +659,54 @@ mod tests {
             contact,
             contact_shear: ContactShear::Penalty,
         }
+    }
+
+    /// `trial_history_as` writes what `respond_as` writes, bit for bit, on every branch:
+    /// loading, unloading, closed and held open or closed against the gap, both contact
+    /// shear laws, contact off, and a non-finite jump.
+    #[test]
+    fn trial_history_alone_is_respond_as_history() {
+        let jumps = [
+            [3e-5, 2e-5],
+            [-4e-5, 1e-6],
+            [1e-6, -3e-5],
+            [2e-4, -1e-7],
+            [0.0, 0.0],
+            [5e-4, 3e-4],
+            [f64::NAN, 1e-5],
+        ];
+        let mut checked = 0;
+        for contact in [false, true] {
+            for shear in [ContactShear::Penalty, ContactShear::Cohesive] {
+                let l = CohesiveLaw {
+                    contact_shear: shear,
+                    ..law(contact)
+                };
+                for delta_max in [0.0, 1e-5, 4e-5, DC, 3.0 * DC] {
+                    for jump in jumps {
+                        for closed in [false, true] {
+                            let (mut full, mut alone) = ([-1.0], [-2.0]);
+                            l.respond_as(
+                                &[delta_max],
+                                &mut full,
+                                jump,
+                                LEN,
+                                TangentKind::Consistent,
+                                closed,
+                            );
+                            l.trial_history_as(&[delta_max], &mut alone, jump, LEN, closed);
+                            assert_eq!(
+                                full[0].to_bits(),
+                                alone[0].to_bits(),
+                                "contact {contact}, {shear:?}, delta_max {delta_max}, jump {jump:?}, closed {closed}"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(checked, 2 * 2 * 5 * 7 * 2);
     }
 
     /// History committed after loading to effective opening `delta`.

@@ -103,6 +103,28 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
         self.respond(committed, trial, jump, length, kind)
     }
 
+    /// The trial history [`InterfaceLaw::respond_as`] writes into `trial`, bit for bit,
+    /// without its traction and matrix: IMPL-EX forms the implicit history from a step's
+    /// jumps and reads nothing else (`solver::implex::finish_step`, at every ITZ point of
+    /// every call). The default calls `respond_as`.
+    fn trial_history_as(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        length: f64,
+        closed: bool,
+    ) {
+        self.respond_as(
+            committed,
+            trial,
+            jump,
+            length,
+            TangentKind::Consistent,
+            closed,
+        );
+    }
+
     /// Whether a point whose history goes from `start` to `trial` within a step passes
     /// the peak of its strength there: the solver then refuses the tangent predictor,
     /// which would carry it past a limit point of the RVE on the pre-peak branch.

@@ -40,7 +40,7 @@ use super::problem::{Problem, Strain};
 use super::settings::IncrementReport;
 use super::workspace::{FactorUse, Workspace};
 use crate::error::{Error, Result};
-use crate::interface::{Implex, TangentKind};
+use crate::interface::Implex;
 use crate::state::{held_contact_words, LinearBranch, State, JUMP_OPERATOR_LEN};
 
 /// Whether the step kept in `committed.linear` (the step that led to `committed`) is the
@@ -190,12 +190,11 @@ pub fn finish_step(
         let closed = law.is_closed(jump);
         let range = q * hl..(q + 1) * hl;
         let length = problem.disc.interfaces[q / np].length;
-        law.respond_as(
+        law.trial_history_as(
             &committed.history[range.clone()],
             &mut trial.history[range.clone()],
             jump,
             length,
-            TangentKind::Consistent,
             closed,
         );
         if closed {
