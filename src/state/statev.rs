@@ -253,13 +253,18 @@ pub fn write(
 /// before an `Option`'s value), written slice by slice without serde. [`read`] decodes
 /// them with bincode; a test holds the two to the same bytes.
 fn encode_payload(core: &CoreView<'_>, payload: &mut Vec<u8>) {
+    /// A sequence: its length, then its values; the bytes are placed into room made first,
+    /// which compiles to a plain copy loop (pushing value by value did not).
     fn words<const N: usize>(
         payload: &mut Vec<u8>,
         values: impl ExactSizeIterator<Item = [u8; N]>,
     ) {
         payload.extend((values.len() as u64).to_le_bytes());
-        payload.reserve(N * values.len());
-        values.for_each(|v| payload.extend_from_slice(&v));
+        let start = payload.len();
+        payload.resize(start + N * values.len(), 0);
+        for (room, v) in payload[start..].chunks_exact_mut(N).zip(values) {
+            room.copy_from_slice(&v);
+        }
     }
     core.strain
         .iter()
