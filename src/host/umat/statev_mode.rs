@@ -508,7 +508,9 @@ fn values_hash(values: &[f64]) -> u64 {
     for (lane, v) in lanes.iter_mut().zip(quads.remainder()) {
         *lane = mix(*lane, v.to_bits());
     }
-    lanes.iter().fold(values.len() as u64, |h, &lane| mix(h, lane))
+    lanes
+        .iter()
+        .fold(values.len() as u64, |h, &lane| mix(h, lane))
 }
 
 /// Whether `core` at `time`, encoded for point `p`'s model, is `statev` bit for bit.
