@@ -12,6 +12,7 @@
 //!   (point id, iterations, sub-steps, the RVE's damage, its largest ITZ opening);
 //! - [`umat`]: the Abaqus UMAT: instances per (element, integration point), committed and
 //!   reverted by the host's increments;
+//! - `values_hash`: a quick hash of values' bits, a filter before comparing them;
 //! - [`vtk_dump`]: `MESORVE_UMAT_VTK`, the RVE fields of chosen points as VTK files.
 
 pub(crate) mod diagnostics;
@@ -20,6 +21,7 @@ pub mod material;
 pub mod mirrors;
 mod share_table;
 pub mod umat;
+mod values_hash;
 pub mod vtk_dump;
 
 pub use hypothesis::{Hypothesis, PlaneResponse, OUT_OF_PLANE_TOLERANCE};

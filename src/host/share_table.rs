@@ -13,6 +13,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
+use super::values_hash::values_hash;
 use crate::model::share::{self, Indicator, StepSignature};
 use crate::model::{Model, Response};
 use crate::state::statev::{Core, CoreView};
@@ -52,16 +53,17 @@ fn status_key(core: &CoreView<'_>) -> u64 {
     h.finish()
 }
 
-/// The key of a whole core bit for bit (the point's own earlier calls of the increment).
+/// The key of a whole core bit for bit (the point's own earlier calls of the increment):
+/// [`status_key`] and [`values_hash`] of the strain and histories (a filter: the
+/// candidate is compared in full).
 fn core_key(core: &CoreView<'_>) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    status_key(core).hash(&mut h);
-    core.strain.map(f64::to_bits).hash(&mut h);
-    for v in core.history.iter().chain(core.previous) {
-        v.to_bits().hash(&mut h);
-    }
-    h.finish()
+    let parts = [
+        status_key(core),
+        values_hash(&core.strain),
+        values_hash(core.history),
+        values_hash(core.previous),
+    ];
+    values_hash(&parts.map(f64::from_bits))
 }
 
 /// A core's [`core_key`] and [`status_key`], computed before the table is locked.

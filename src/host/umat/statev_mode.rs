@@ -11,6 +11,7 @@ use super::point::{call_strain, lock, MaterialKey, Point, TIME_ROUNDOFF};
 use super::table::{write_outputs, Failed, Umat};
 use crate::error::Error;
 use crate::host::diagnostics::{note_once, Note};
+use crate::host::values_hash::values_hash;
 use crate::host::material::Material;
 use crate::host::share_table::{Anchor, IncrementKey, Step};
 use crate::host::vtk_dump;
@@ -485,32 +486,6 @@ fn with_written<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
     let result = f(&mut buffer);
     let _ = WRITTEN.try_with(|b| b.replace(buffer));
     result
-}
-
-/// A hash of `values`' bits (not cryptographic: a quick filter before [`encodes_to`]).
-/// Four independent lanes, one per value mod 4, so that the multiplications overlap
-/// (one chain was a serial dependency over the 790 values of a member's point).
-fn values_hash(values: &[f64]) -> u64 {
-    const PRIME: u64 = 0x0100_0000_01b3;
-    let mix = |h: u64, bits: u64| (h.rotate_left(5) ^ bits).wrapping_mul(PRIME);
-    let mut lanes = [
-        0xcbf2_9ce4_8422_2325,
-        0x9e37_79b9_7f4a_7c15,
-        0x2545_f491_4f6c_dd1d,
-        0x8422_2325_cbf2_9ce4,
-    ];
-    let mut quads = values.chunks_exact(4);
-    for quad in &mut quads {
-        for (lane, v) in lanes.iter_mut().zip(quad) {
-            *lane = mix(*lane, v.to_bits());
-        }
-    }
-    for (lane, v) in lanes.iter_mut().zip(quads.remainder()) {
-        *lane = mix(*lane, v.to_bits());
-    }
-    lanes
-        .iter()
-        .fold(values.len() as u64, |h, &lane| mix(h, lane))
 }
 
 /// Whether `core` at `time`, encoded for point `p`'s model, is `statev` bit for bit.
