@@ -313,11 +313,12 @@ impl CohesiveLaw {
         closed: bool,
     ) -> CohesivePoint {
         let [ds, dn] = jump;
-        if !self.contact || !(closed || dn < 0.0) {
+        let side = self.side(dn, closed);
+        if side == Side::Open {
             return self.open(history, ds, dn);
         }
         let kp = self.contact_stiffness(length);
-        if closed && self.contact_shear == ContactShear::Penalty {
+        if side == Side::Penalty {
             // Eqs. 36-37 and 47.
             return CohesivePoint {
                 traction: Vector2::new(kp * ds, kp * dn),
@@ -340,6 +341,18 @@ impl CohesiveLaw {
             point.branch = Branch::Contact;
         }
         point
+    }
+
+    /// Which branch of [`CohesiveLaw::evaluate_as`] a point of normal jump `dn` and held
+    /// status `closed` is on.
+    fn side(&self, dn: f64, closed: bool) -> Side {
+        if !self.contact || !(closed || dn < 0.0) {
+            Side::Open
+        } else if closed && self.contact_shear == ContactShear::Penalty {
+            Side::Penalty
+        } else {
+            Side::Sliding
+        }
     }
 
     /// Whether holding the contact status changes anything: contact on with
@@ -393,6 +406,16 @@ impl CohesiveLaw {
     }
 }
 
+/// The branches of [`CohesiveLaw::evaluate_as`]: open (the cohesive law of the whole
+/// jump), closed under the paper's penalty (eqs. 36-37, history unchanged), or the
+/// cohesive law of the sliding alone plus the normal penalty.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Side {
+    Open,
+    Penalty,
+    Sliding,
+}
+
 impl InterfaceLaw for CohesiveLaw {
     /// `delta_max`: the paper's pair `(delta_max, t_max)` has one degree of freedom (see
     /// [`CohesiveHistory`]).
@@ -443,10 +466,10 @@ impl InterfaceLaw for CohesiveLaw {
         }
     }
 
-    /// `delta_max` of [`CohesiveLaw::evaluate_as`]'s branches without their tractions:
-    /// unchanged on a closed point of the penalty law, else the larger of `delta_max` and
-    /// the effective opening (of the sliding alone on a closed point of the cohesive shear
-    /// law), formed as `open` forms them.
+    /// `delta_max` of [`CohesiveLaw::evaluate_as`]'s branches ([`Side`]) without their
+    /// tractions: unchanged under the penalty, else the larger of `delta_max` and the
+    /// effective opening (of the sliding alone on [`Side::Sliding`]), formed as `open`
+    /// forms them.
     fn trial_history_as(
         &self,
         committed: &[f64],
@@ -457,13 +480,13 @@ impl InterfaceLaw for CohesiveLaw {
     ) {
         let [ds, dn] = jump;
         let delta_max = committed[0];
-        let opening = if !self.contact || !(closed || dn < 0.0) {
-            (self.beta * ds).hypot(dn)
-        } else if closed && self.contact_shear == ContactShear::Penalty {
-            trial[0] = delta_max;
-            return;
-        } else {
-            (self.beta * ds).hypot(0.0)
+        let opening = match self.side(dn, closed) {
+            Side::Open => (self.beta * ds).hypot(dn),
+            Side::Penalty => {
+                trial[0] = delta_max;
+                return;
+            }
+            Side::Sliding => (self.beta * ds).hypot(0.0),
         };
         trial[0] = if opening >= delta_max {
             opening

@@ -59,9 +59,7 @@ pub struct ImplexHistory {
 impl ImplexHistory {
     /// Whether point `point` is closed.
     pub fn is_closed(&self, point: usize) -> bool {
-        self.closed
-            .get(point / 64)
-            .is_some_and(|w| w >> (point % 64) & 1 == 1)
+        status_bit(&self.closed, point)
     }
 
     fn copy_from(&mut self, other: &ImplexHistory) {
@@ -90,6 +88,14 @@ impl ImplexHistory {
 /// Words of a [`State::held_contact`] bitset for `n_history` history values.
 pub fn held_contact_words(n_history: usize) -> usize {
     n_history.div_ceil(64)
+}
+
+/// Bit `point` of status words laid out as [`held_contact_words`] counts them (point `i`
+/// in bit `i % 64` of word `i / 64`); false past the words.
+pub fn status_bit(words: &[u64], point: usize) -> bool {
+    words
+        .get(point / 64)
+        .is_some_and(|w| w >> (point % 64) & 1 == 1)
 }
 
 /// Values per quantization block of a [`Quantized`] vector.
@@ -268,9 +274,7 @@ impl State {
 
     /// Whether point `point` is held against its gap (see [`State::held_contact`]).
     pub fn is_held(&self, point: usize) -> bool {
-        self.held_contact
-            .get(point / 64)
-            .is_some_and(|w| w >> (point % 64) & 1 == 1)
+        status_bit(&self.held_contact, point)
     }
 
     /// Whether `unknowns` hold the fluctuation at `strain` (false after fast updates: the

@@ -43,7 +43,7 @@ use std::cell::RefCell;
 
 use serde::{Deserialize, Serialize};
 
-use super::instance_state::held_contact_words;
+use super::instance_state::{held_contact_words, status_bit};
 use super::persist::StateSizes;
 use crate::error::{Error, Result};
 
@@ -102,18 +102,28 @@ pub struct CoreView<'a> {
 impl CoreView<'_> {
     /// Whether point `point` is closed.
     pub fn is_closed(&self, point: usize) -> bool {
-        closed_bit(&self.closed, point)
+        status_bit(&self.closed, point)
     }
 
-    /// Whether `core` is this core, field by field (as `Core`'s `==`).
+    /// Whether `core` is this core, field by field (as `Core`'s `==`; every field named, so
+    /// that a field added to `Core` must be added here).
     pub fn is(&self, core: &Core) -> bool {
-        self.strain == core.strain
-            && *self.history == *core.history
-            && self.closed == core.closed
-            && *self.previous == *core.previous
-            && self.step == core.step
-            && self.at_start == core.at_start
-            && self.time == core.time
+        let Core {
+            strain,
+            history,
+            closed,
+            previous,
+            step,
+            at_start,
+            time,
+        } = core;
+        self.strain == *strain
+            && self.history == history.as_slice()
+            && self.closed == *closed
+            && self.previous == previous.as_slice()
+            && self.step == *step
+            && self.at_start == *at_start
+            && self.time == *time
     }
 
     /// The owned core.
@@ -178,7 +188,7 @@ impl Core {
 
     /// Whether point `point` is closed.
     pub fn is_closed(&self, point: usize) -> bool {
-        closed_bit(&self.closed, point)
+        status_bit(&self.closed, point)
     }
 
     /// Whether the buffers fit a model of `sizes` with `points` interface points and hold
@@ -199,13 +209,6 @@ impl Core {
                 .chain(&self.previous)
                 .all(|v| v.is_finite())
     }
-}
-
-/// Bit `point` of contact status words (1: closed).
-fn closed_bit(words: &[u64], point: usize) -> bool {
-    words
-        .get(point / 64)
-        .is_some_and(|w| w >> (point % 64) & 1 == 1)
 }
 
 /// `STATEV` entries a model of `sizes` with `points` interface points needs for its
