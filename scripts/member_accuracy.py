@@ -11,7 +11,8 @@ path without extension: JOB.inp, JOB.dat, JOB.time from /usr/bin/time -v) one ro
 - increments, wall time and CPU time (and both against the FINE run's);
 - against FINE, along the whole load path (down, back, up), at the run's own increments
   (every run's path is the same piecewise-linear U(t); its increment k of N ends at the
-  fraction k / N of it, which FINE's increments include):
+  fraction k / N of it, which FINE's increments include when N divides FINE's count;
+  otherwise FINE's F is interpolated linearly in U along the same leg):
   - **L1**: the mean of |F - F_fine| over the run's increments, in units of FINE's largest |F|;
   - **max**: the largest |F - F_fine|, same units;
   - **dissipated work**: W = integral of F dU over the path (trapezoids from the origin)
@@ -66,12 +67,41 @@ def dissipated(curve):
     return w - 0.5 * f0 * u0
 
 
+def legs(curve):
+    """The curve split where U turns: [[(U, F), ...] per leg], each leg starting at the
+    end of the last (the first at the origin)."""
+    out, start, sign = [], (0.0, 0.0), 0
+    for _, u, f in curve:
+        prev = out[-1][-1] if out else start
+        d = (u > prev[0]) - (u < prev[0])
+        if not out or (d and sign and d != sign):
+            out.append([prev])
+        sign = d or sign
+        out[-1].append((u, f))
+    return out
+
+
 def on_fine(run, fine):
-    """[(F, F_fine)] at the run's increments: increment k of N is FINE's k * M / N."""
+    """[(F, F_fine)] at the run's increments. When FINE's M increments are a multiple of
+    the run's N, increment k of N is FINE's k * M / N; else F_fine is interpolated linearly
+    in U along the same leg of FINE's curve (a leg ends where U turns: down, then back
+    and up)."""
     n, m = len(run["curve"]), len(fine["curve"])
-    if m % n:
-        fail(f"the reference's {m} increments are not a multiple of {n}")
-    return [(p[2], fine["curve"][(k + 1) * (m // n) - 1][2]) for k, p in enumerate(run["curve"])]
+    if m % n == 0:
+        return [(p[2], fine["curve"][(k + 1) * (m // n) - 1][2]) for k, p in enumerate(run["curve"])]
+    mine, ref = legs(run["curve"]), legs(fine["curve"])
+    if len(mine) != len(ref):
+        fail(f"the run has {len(mine)} legs of U, the reference {len(ref)}")
+    pairs = []
+    for leg, ref_leg in zip(mine, ref):
+        for u, f in leg[1:]:
+            for (u0, f0), (u1, f1) in zip(ref_leg, ref_leg[1:]):
+                if min(u0, u1) - 1e-12 <= u <= max(u0, u1) + 1e-12 and u0 != u1:
+                    pairs.append((f, f0 + (f1 - f0) * (u - u0) / (u1 - u0)))
+                    break
+            else:
+                fail(f"U = {u:g} is outside the reference's leg")
+    return pairs
 
 
 def curve_error(pairs, scale):
