@@ -3,7 +3,9 @@
 //! (CalculiX, which upper-cases the function name of `@ABAQUS_<LIB>_<FUNC>`). Only
 //! pointer translation here; the logic is `crate::host::umat`.
 
+use std::borrow::Cow;
 use std::ffi::{c_char, c_int};
+use std::fmt::Write;
 
 use super::guard::{guard, slice, slice_mut, Failure, FfiResult};
 use super::status::RveStatus;
@@ -17,16 +19,27 @@ use crate::host::Hypothesis;
 const CMNAME_MAX: usize = 80;
 
 /// A host's bytes as text that is safe to print: up to the first NUL, printable ASCII
-/// kept, any other byte as `\xNN`.
-fn printable(bytes: &[u8]) -> String {
+/// kept, any other byte as `\xNN`. Borrowed when every byte is printable (a host's usual
+/// `CMNAME`): the UMAT reads it at every call, so it allocates only for a name to escape.
+fn printable(bytes: &[u8]) -> Cow<'_, str> {
     let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
-    bytes[..end]
-        .iter()
-        .map(|&b| match b {
-            b' '..=b'~' => char::from(b).to_string(),
-            _ => format!("\\x{b:02x}"),
-        })
-        .collect()
+    let bytes = &bytes[..end];
+    let is_printable = |b: &u8| (b' '..=b'~').contains(b);
+    if bytes.iter().all(is_printable) {
+        if let Ok(text) = std::str::from_utf8(bytes) {
+            return Cow::Borrowed(text);
+        }
+    }
+    let mut text = String::with_capacity(4 * bytes.len());
+    for &b in bytes {
+        if is_printable(&b) {
+            text.push(char::from(b));
+        } else {
+            // Writing into a String cannot fail.
+            let _ = write!(text, "\\x{b:02x}");
+        }
+    }
+    Cow::Owned(text)
 }
 
 /// Fills `STRESS(1:NTENS)` with NaN after a failure before the table saw the call, for a
@@ -74,9 +87,9 @@ impl Args {
     ///
     /// # Safety
     /// As [`rve_umat`]'s.
-    unsafe fn material_name(&self, signal: HostSignal) -> FfiResult<String> {
+    unsafe fn material_name(&self, signal: HostSignal) -> FfiResult<Cow<'_, str>> {
         if let Some(scene) = umat_scene() {
-            return Ok(scene.name.clone());
+            return Ok(Cow::Borrowed(&scene.name));
         }
         if signal == HostSignal::NanStress {
             note_once(Note::NoScene, || {
@@ -84,7 +97,7 @@ impl Args {
                  read, every point is the embedded paper RVE (printed once)"
                     .to_string()
             });
-            return Ok(String::new());
+            return Ok(Cow::Borrowed(""));
         }
         let name_len = (self.cmname_len as u32 as usize).min(CMNAME_MAX);
         let bytes = slice(self.cmname.cast::<u8>(), name_len, "CMNAME")?;
@@ -315,6 +328,7 @@ mod tests {
     #[test]
     fn host_bytes_are_escaped() {
         assert_eq!(printable(b"CONCRETE  "), "CONCRETE  ");
+        assert!(matches!(printable(b"CONCRETE  "), Cow::Borrowed(_)));
         assert_eq!(printable(b"A\x9c\n\x1b[2J"), "A\\x9c\\x0a\\x1b[2J");
         assert_eq!(printable(b"AB\0garbage\xff"), "AB");
         assert!(printable(&[0x80, 0xfe, 0x07])
