@@ -30,16 +30,24 @@ pub(super) fn table_refused(nstatv: usize, needed: usize) -> Error {
     ))
 }
 
-/// Says once per process that `STATEV` is too short to hold the state.
-fn table_note(c: &UmatCall, nstatv: usize, needed: usize) {
+/// Says once per process that `STATEV` is too short to hold the state, and that a
+/// scene's `share_tolerance` is not applied there (sharing is a `STATEV`-mode and batch
+/// feature: table points are not looked up against each other).
+fn table_note(c: &UmatCall, nstatv: usize, needed: usize, shares: bool) {
     note_once(Note::TableMode, || {
         format!(
             "mesorve: material `{}`: NSTATV = {nstatv}, the RVE state needs {needed} \
              (*DEPVAR at least `rve info`'s umat_nstatv; {} with the {MIRRORS} mirrors): \
              the state stays in the library's table, which a restart, a second analysis or \
-             a re-added element does not carry (printed once)",
+             a re-added element does not carry{} (printed once)",
             trim(c.cmname),
-            needed + MIRRORS
+            needed + MIRRORS,
+            if shares {
+                "; the scene's solver.share_tolerance is not applied in table mode (every \
+                 point solves its own RVE: give the STATEV room to share)"
+            } else {
+                ""
+            }
         )
     });
 }
@@ -60,7 +68,8 @@ impl Umat {
         p.instance.set_lean(false);
         let material = p.material.clone();
         let with_material = Failed::of(&material);
-        table_note(c, out.statev.len(), material.model.statev_len());
+        let shares = material.model.solver.share_tolerance.is_some();
+        table_note(c, out.statev.len(), material.model.statev_len(), shares);
         let inc = Increment {
             kstep: c.kstep,
             kinc: c.kinc,
