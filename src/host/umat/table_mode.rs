@@ -12,7 +12,7 @@ use crate::host::diagnostics::{note_once, Note};
 use crate::host::mirrors::MIRRORS;
 use crate::host::vtk_dump;
 use crate::model::workspaces::with_workspace;
-use crate::model::Response;
+use crate::model::{share, Model, Response};
 
 /// Table mode asked for by a host without `PNEWDT`
 /// ([`HostSignal::NanStress`](super::HostSignal::NanStress)): refused, since such a host
@@ -33,8 +33,9 @@ pub(super) fn table_refused(nstatv: usize, needed: usize) -> Error {
 /// Says once per process that `STATEV` is too short to hold the state, and that a
 /// scene's `share_tolerance` is not applied there (sharing is a `STATEV`-mode and batch
 /// feature: table points are not looked up against each other).
-fn table_note(c: &UmatCall, nstatv: usize, needed: usize, shares: bool) {
+fn table_note(c: &UmatCall, nstatv: usize, model: &Model) {
     note_once(Note::TableMode, || {
+        let needed = model.statev_len();
         format!(
             "mesorve: material `{}`: NSTATV = {nstatv}, the RVE state needs {needed} \
              (*DEPVAR at least `rve info`'s umat_nstatv; {} with the {MIRRORS} mirrors): \
@@ -42,7 +43,7 @@ fn table_note(c: &UmatCall, nstatv: usize, needed: usize, shares: bool) {
              a re-added element does not carry{} (printed once)",
             trim(c.cmname),
             needed + MIRRORS,
-            if shares {
+            if share::tolerance(model).is_some() {
                 "; the scene's solver.share_tolerance is not applied in table mode (every \
                  point solves its own RVE: give the STATEV room to share)"
             } else {
@@ -68,8 +69,7 @@ impl Umat {
         p.instance.set_lean(false);
         let material = p.material.clone();
         let with_material = Failed::of(&material);
-        let shares = material.model.solver.share_tolerance.is_some();
-        table_note(c, out.statev.len(), material.model.statev_len(), shares);
+        table_note(c, out.statev.len(), &material.model);
         let inc = Increment {
             kstep: c.kstep,
             kinc: c.kinc,
