@@ -149,7 +149,10 @@ impl Umat {
             if !Arc::ptr_eq(&p.material, &material) {
                 *p = Point::new(p.id, MaterialKey::of(c), material.clone());
             }
-            return self.statev_outcome(&mut p, c, out, true).map_err(failed);
+            let outcome = self.statev_outcome(&mut p, c, out, true);
+            // Between calls a lean IMPL-EX point holds its step, not its trial's body.
+            p.instance.park();
+            return outcome.map_err(failed);
         }
         let n = material.model.statev_len();
         let mut p = take_slot(self.id, &material, &out.statev[..n]).unwrap_or_else(|| {
@@ -171,11 +174,11 @@ impl Umat {
         timed: bool,
     ) -> crate::Result<Outcome> {
         let n = p.material.model.statev_len();
-        // The host keeps the committed state: implicit points keep no full trial, unless
-        // `MESORVE_UMAT_VTK` writes the point's fields from it.
+        // The host keeps the committed state: points are lean (implicit: no full trial;
+        // IMPL-EX: no unknowns, one step), unless `MESORVE_UMAT_VTK` writes the point's
+        // fields from its full states.
         let dumped = self.vtk.as_ref().is_some_and(|v| v.chooses(c.noel, c.npt));
-        p.instance
-            .set_lean(p.material.model.solver.integration != Integration::Implex && !dumped);
+        p.instance.set_lean(!dumped);
         // A point whose fields are written solves its own answer.
         let implex = p.material.model.solver.integration == Integration::Implex;
         if timed && !dumped && !implex {
@@ -279,6 +282,9 @@ impl Umat {
             // IMPL-EX: the host kept the point's last trial, which is the state those values
             // expand to plus the step kept for carrying over (whose answers are the same
             // bit for bit): it is committed instead of rebuilt.
+            if implex && p.instance.is_parked() && p.statev.trial_hash == Some(values_hash(statev)) {
+                p.instance.unpark();
+            }
             if implex && p.holds_trial(statev) && p.instance.commit().is_ok() {
                 p.statev.core_time = p.statev.trial_time;
             } else {
