@@ -280,7 +280,13 @@ impl Instance {
             return;
         };
         bodies::take(trial, self.committed.history.len());
-        implex::finish_step(&self.model.problem(), &self.committed, &last.strain, last.dt, trial);
+        implex::finish_step(
+            &self.model.problem(),
+            &self.committed,
+            &last.strain,
+            last.dt,
+            trial,
+        );
     }
 
     /// Whether the pending trial is parked ([`park`](Self::park)).
@@ -851,7 +857,10 @@ mod tests {
         lean.set_lean(true);
         let consistent = TangentRequest::Consistent;
         let mut carried = 0;
-        for (k, level) in [1.0, 2.0, 3.0, 4.0, 3.0, 2.0, 2.0, 5.0].into_iter().enumerate() {
+        for (k, level) in [1.0, 2.0, 3.0, 4.0, 3.0, 2.0, 2.0, 5.0]
+            .into_iter()
+            .enumerate()
+        {
             let (mut seen, mut bytes) = (Vec::new(), Vec::new());
             for inst in [&mut full, &mut lean] {
                 let mut answers = Vec::new();
@@ -872,7 +881,11 @@ mod tests {
                 seen.push((Vec::new(), None));
             }
             assert_eq!(seen[0], seen[2], "increment {k}");
-            assert_eq!(full.committed_core(), lean.committed_core(), "increment {k}");
+            assert_eq!(
+                full.committed_core(),
+                lean.committed_core(),
+                "increment {k}"
+            );
             carried += seen[0].0.iter().filter(|a| a.2 == 0).count();
             // Between calls: the committed history and h_{n-1}, and the step.
             assert!(2 * bytes[1] < bytes[0], "increment {k}: {bytes:?}");

@@ -282,10 +282,7 @@ impl Umat {
             // IMPL-EX: the host kept the point's last trial, which is the state those values
             // expand to plus the step kept for carrying over (whose answers are the same
             // bit for bit): it is committed instead of rebuilt.
-            if implex && p.instance.is_parked() && p.statev.trial_hash == Some(values_hash(statev)) {
-                p.instance.unpark();
-            }
-            if implex && p.holds_trial(statev) && p.instance.commit().is_ok() {
+            if implex && p.takes_trial_back(statev) && p.instance.commit().is_ok() {
                 p.statev.core_time = p.statev.trial_time;
             } else {
                 let stored = statev::read(
@@ -459,9 +456,23 @@ impl Point {
 
     /// Whether `statev` are the values written for the pending trial.
     fn holds_trial(&self, statev: &[f64]) -> bool {
-        self.statev.trial_hash == Some(values_hash(statev))
-            && (self.instance.trial_core_view())
-                .is_ok_and(|core| encodes_to(core, self, self.statev.trial_time, statev))
+        self.statev.trial_hash == Some(values_hash(statev)) && self.trial_encodes_to(statev)
+    }
+
+    /// [`holds_trial`](Self::holds_trial) for a point whose trial may be parked
+    /// (`Instance::park`): a trial whose values hash as `statev` is formed again first.
+    fn takes_trial_back(&mut self, statev: &[f64]) -> bool {
+        if self.statev.trial_hash != Some(values_hash(statev)) {
+            return false;
+        }
+        self.instance.unpark();
+        self.trial_encodes_to(statev)
+    }
+
+    /// Whether the pending trial's core encodes to `statev` bit for bit.
+    fn trial_encodes_to(&self, statev: &[f64]) -> bool {
+        (self.instance.trial_core_view())
+            .is_ok_and(|core| encodes_to(core, self, self.statev.trial_time, statev))
     }
 
     /// The pending trial's values (at
