@@ -76,7 +76,11 @@ class Strip:
         dofs = self.basis.get_dofs
         self.left_x = dofs(lambda x: np.isclose(x[0], 0)).nodal["u^1"]
         self.right_x = dofs(lambda x: np.isclose(x[0], L)).nodal["u^1"]
-        corner = dofs(lambda x: np.isclose(x[0], 0) & np.isclose(x[1], 0)).nodal["u^2"]
+        # The lower left corner's y: a node, which get_dofs (facets) does not find.
+        at_corner = np.isclose(self.mesh.p[0], 0) & np.isclose(self.mesh.p[1], 0)
+        corner = self.basis.nodal_dofs[1, np.flatnonzero(at_corner)]
+        if corner.size != 1:
+            raise RuntimeError(f"expected one corner node at (0, 0), found {corner.size}")
         self.fixed = np.concatenate([self.left_x, self.right_x, corner])
         self.u = np.zeros(self.basis.N)
 
