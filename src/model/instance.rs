@@ -289,9 +289,14 @@ impl Instance {
         );
     }
 
-    /// Whether the pending trial is parked ([`park`](Self::park)).
-    pub fn is_parked(&self) -> bool {
-        self.parked
+    /// Gives a parked trial its buffers back without forming them: for an update, which
+    /// forms them, and a revert, which drops the trial.
+    fn unpark_unformed(&mut self) {
+        if std::mem::take(&mut self.parked) {
+            if let Some(trial) = self.trial.as_deref_mut() {
+                bodies::take(trial, self.committed.history.len());
+            }
+        }
     }
 
     /// The IMPL-EX update: the step kept from an earlier update of this step (same
@@ -303,6 +308,7 @@ impl Instance {
         ws: &mut Workspace,
         request: TangentRequest,
     ) -> Result<Response> {
+        self.unpark_unformed();
         let model = &self.model;
         let ratio = implex::step_ratio(self.committed.implex.step, dt).to_bits();
         let reuse = model.solver.fast_path && self.implex_step == Some(ratio);
@@ -310,16 +316,7 @@ impl Instance {
         let carry = !reuse
             && model.solver.fast_path
             && ((lean && self.carried) || implex::carries_over(&self.committed));
-        let trial = self.trial.get_or_insert_with(|| {
-            let mut state = model.new_state();
-            if lean {
-                state.unknowns = Vec::new();
-            }
-            Box::new(state)
-        });
-        if std::mem::take(&mut self.parked) {
-            bodies::take(trial, self.committed.history.len());
-        }
+        let trial = (self.trial).get_or_insert_with(|| Box::new(new_state(model, lean)));
         if lean && !reuse {
             // One step per lean instance: the committed state's is the trial's when it
             // carries over, and its buffers the new step's otherwise.
@@ -424,19 +421,12 @@ impl Instance {
         self.pending = Pending::Nothing;
         self.last = None;
         self.lean_core = None;
-        if std::mem::take(&mut self.parked) {
-            if let Some(trial) = self.trial.as_deref_mut() {
-                bodies::take(trial, self.committed.history.len());
-            }
-        }
+        self.unpark_unformed();
     }
 
     /// Back to the virgin state, as a new instance (the trial's buffers are released).
     pub fn reset(&mut self) {
-        self.committed = self.model.new_state();
-        if self.lean_implex() {
-            self.committed.unknowns = Vec::new();
-        }
+        self.committed = new_state(&self.model, self.lean_implex());
         self.trial = None;
         self.implex_step = None;
         self.carried = false;
@@ -570,6 +560,7 @@ impl Instance {
         self.committed = self.model.expand_core(core, ws)?;
         self.carried = false;
         if self.lean_implex() {
+            // Expanded with zero unknowns, which no IMPL-EX answer reads.
             self.committed.unknowns = Vec::new();
         }
         self.implex_step = None;
@@ -759,6 +750,15 @@ fn with_scratch<T>(model: &Model, f: impl FnOnce(&mut State) -> Result<T>) -> Re
     result
 }
 
+/// A new state of `model`; without unknowns for a lean IMPL-EX instance (`lean`).
+fn new_state(model: &Model, lean: bool) -> State {
+    let mut state = model.new_state();
+    if lean {
+        state.unknowns = Vec::new();
+    }
+    state
+}
+
 /// This thread's parked trial bodies ([`Instance::park`]): the buffers of the trials of
 /// lean IMPL-EX instances between the host's calls, so that parking and unparking
 /// allocate nothing once a thread has a few.
@@ -872,7 +872,7 @@ mod tests {
                     answers.push((r.stress.map(f64::to_bits), r.tangent.map(f64::to_bits), f));
                     inst.park();
                 }
-                assert!(inst.trial_core().is_err() == inst.is_parked());
+                assert!(inst.trial_core().is_err() == inst.parked);
                 bytes.push(inst.state_bytes());
                 inst.unpark();
                 seen.push((answers, Some(inst.trial_core().unwrap())));
