@@ -97,11 +97,17 @@ fn homogeneous_batch_solves_once_per_increment_and_equals_the_exact_run() {
     let scales = [1.0; 6];
     let exact = run(&mut instances(&exact_model, 6), &scales, 2);
     let shared = run(&mut instances(&shared_model, 6), &scales, 2);
+    // Every follower takes point 0's step, or carries its own over (an unloading point's
+    // step is the last one's: exact and free, as the anchor's): one factorization at most
+    // per increment, all of them point 0's.
     for (i, reports) in shared.reports.iter().enumerate() {
-        let (solved, followers) = share::counts(reports);
-        assert_eq!((solved, followers), (1, 5), "increment {i}");
-        assert!(reports[1..].iter().all(|r| r.shared_from == Some(0)));
+        for r in &reports[1..] {
+            assert!(r.factorizations == 0, "increment {i}: {r:?}");
+            assert!(r.shared_from == Some(0) || r.fast, "increment {i}: {r:?}");
+        }
     }
+    let shared_calls: usize = shared.reports.iter().map(|r| share::counts(r).1).sum();
+    assert!(shared_calls >= 5 * 12, "{shared_calls} shared calls");
     for (a, b) in exact
         .stresses
         .iter()
@@ -161,12 +167,19 @@ fn never_shares_across_materials() {
         .map(|m| Instance::new((*m).clone()))
         .collect();
     let shared = run(&mut points, &[1.0; 6], 2);
+    let mut shared_calls = 0;
     for reports in &shared.reports {
-        assert_eq!(share::counts(reports), (3, 3));
-        for (k, r) in reports.iter().enumerate().skip(3) {
-            assert_eq!(r.shared_from, Some(k - 3));
+        for (k, r) in reports.iter().enumerate() {
+            // Point k >= 3 may only follow point k - 3, its own model's twin (or carry its
+            // own step over).
+            assert!(
+                r.shared_from.is_none() || r.shared_from == Some(k - 3),
+                "{k}: {r:?}"
+            );
+            shared_calls += usize::from(r.shared_from.is_some());
         }
     }
+    assert!(shared_calls >= 3 * 12, "{shared_calls} shared calls");
 }
 
 #[test]

@@ -2,8 +2,10 @@
 //! [`crate::model::share`], `docs/sharing.md`): a table per material and host increment,
 //! shared by the host's threads, of the answers of the points solved so far in the
 //! increment (anchors). A point whose committed `STATEV` core and strain match an anchor
-//! takes its answer corrected to first order and writes the anchor's trial core with its
-//! own strain and time, without rebuilding or solving its RVE.
+//! takes its answer corrected to first order and writes its own committed core (or, for a
+//! twin, the anchor's trial core) with its own strain and time, without rebuilding or
+//! solving its RVE, when the error indicator allows ([`share::follows`]). Under IMPL-EX
+//! the table holds the increment's steps instead (step sharing).
 //!
 //! The increment is `(TIME(2), DTIME, KSTEP)` of the calls: a new one (or a cut-back's
 //! smaller `DTIME`) starts an empty table. The answers then depend on which points of the
@@ -14,7 +16,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use super::values_hash::values_hash;
-use crate::model::share::{self, Indicator, StepSignature};
+use crate::model::share::{self, Follow, StepSignature};
 use crate::model::{Model, Response};
 use crate::state::statev::{Core, CoreView};
 use crate::state::LinearBranch;
@@ -200,27 +202,19 @@ impl ShareTable {
                 share::strains_close(tol, &strain, &a.strain)
                     && share::cores_close(tol, core, &a.committed)
             })?;
-            let switched = anchor.trial.closed != anchor.committed.closed;
-            let grew = !share::close(
-                tol,
-                &anchor.trial.history,
-                &anchor.committed.history,
-                share::H_FLOOR,
-            );
-            let indicator = Indicator::default();
-            if !share::keeps_share(
-                indicator,
-                tol,
-                &anchor.response,
-                &anchor.strain,
-                &strain,
-                switched,
-                grew,
-            ) {
-                return None;
-            }
+            let same = |a: &[f64], b: &[f64]| {
+                a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+            };
+            let still = anchor.trial.closed == anchor.committed.closed
+                && same(&anchor.trial.history, &anchor.committed.history);
+            let twin = share::cores_close(0.0, core, &anchor.committed);
+            let follow =
+                share::follows(tol, &anchor.response, &anchor.strain, &strain, twin, still)?;
             let response = share::corrected(&anchor.response, &anchor.strain, &strain);
-            let mut written = anchor.trial.clone();
+            let mut written = match follow {
+                Follow::Twin => anchor.trial.clone(),
+                Follow::Own => core.clone(),
+            };
             written.strain = strain;
             written.time = time;
             inc.shared += 1;

@@ -11,8 +11,9 @@
 //! asked for; see [`super::share`]): the points are split in index order, on the calling
 //! thread, into anchors and followers (a point is an anchor unless an earlier anchor of
 //! the same model matches it); the anchors are solved in parallel; then, in index order,
-//! each follower takes its anchor's answer corrected to first order and a trial derived
-//! from the anchor's, or, when the error indicator refuses, its own solve (in parallel).
+//! each follower takes its anchor's answer corrected to first order (implicit
+//! integration, when the error indicator allows) or its IMPL-EX step; the followers that
+//! took a step answer on it, and those the indicator refused solve, in parallel.
 //! Every choice depends only on the inputs and the anchors' answers, so the result is
 //! still the same whatever the number of threads, bit for bit. Without the key every
 //! point solves, as before.
@@ -25,11 +26,11 @@ use std::sync::{Arc, LazyLock, Mutex};
 use rayon::iter::Either;
 use rayon::prelude::*;
 
-use super::share::{self, Indicator};
+use super::share::{self, Follow, StepSignature};
 use super::workspaces::with_workspace;
 use super::{Instance, Model, Response};
 use crate::error::{Error, Result};
-use crate::solver::TangentRequest;
+use crate::solver::{implex, Integration, TangentRequest};
 
 /// How far to trust an update (MGIS-style).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -189,22 +190,6 @@ pub fn update_batch<P: BatchPoint>(
     step: BatchStep,
     out: BatchOutputs<'_>,
 ) -> Result<Failures<P::Error>> {
-    update_batch_with(points, strains, step, Indicator::default(), out)
-}
-
-/// [`update_batch`] with the error indicator of answer sharing chosen (for measuring
-/// the choices, `docs/sharing.md`); without `share_tolerance` in the points' scenes it
-/// is `update_batch`.
-///
-/// # Panics
-/// As [`update_batch`].
-pub fn update_batch_with<P: BatchPoint>(
-    points: &mut [P],
-    strains: &[[f64; 3]],
-    step: BatchStep,
-    indicator: Indicator,
-    out: BatchOutputs<'_>,
-) -> Result<Failures<P::Error>> {
     let n = points.len();
     assert!(
         strains.len() == n
@@ -220,12 +205,12 @@ pub fn update_batch_with<P: BatchPoint>(
         )));
     }
     let plan = if step.request == TangentRequest::Consistent {
-        share_plan(points, strains)
+        share_plan(points, strains, step.dtime)
     } else {
         None
     };
     if let Some(plan) = plan {
-        let run = |pts: &mut [P]| shared(pts, strains, step, indicator, &plan, out);
+        let run = |pts: &mut [P]| shared(pts, strains, step, &plan, out);
         return Ok(match step.threads {
             1 | 0 => run(points),
             k => pool(k)?.install(|| run(points)),
@@ -295,49 +280,98 @@ fn run_point<P: BatchPoint>(
 /// A point's outcome in a sharing batch (`None`: not run in this pass).
 type Outcome<E> = Option<std::result::Result<Response, E>>;
 
-/// For answer sharing: each point's anchor (`Some(j)`, `j < k`) or `None` (it solves),
-/// chosen in index order (a point is an anchor unless an earlier anchor of the same model
-/// matches it, [`share::strains_close`] and [`share::states_close`]); `None` when no
-/// point's scene asks for sharing.
-fn share_plan<P: BatchPoint>(points: &mut [P], strains: &[[f64; 3]]) -> Option<Vec<Option<usize>>> {
-    let models: Vec<Option<(Arc<Model>, f64)>> = points
-        .iter_mut()
-        .map(|p| {
-            p.with_instance(|i| share::tolerance(i.model()).map(|t| (i.model().clone(), t)))
-                .flatten()
+/// What a point of a sharing batch is compared by: its model and tolerance, and under
+/// IMPL-EX the step ratio (bits) and signature of its next step.
+struct Sharer {
+    model: Arc<Model>,
+    tol: f64,
+    step: Option<(u64, StepSignature)>,
+}
+
+impl Sharer {
+    /// `None`: the point does not share (no instance, no `share_tolerance`).
+    fn of(instance: &Instance, dtime: f64) -> Option<Self> {
+        let model = instance.model();
+        let tol = share::tolerance(model)?;
+        let solver = &model.solver;
+        let step = (solver.integration == Integration::Implex && solver.fast_path).then(|| {
+            let ratio = implex::step_ratio(instance.committed().implex.step, dtime);
+            let signature = StepSignature::of(model, &instance.committed_core_view(), ratio);
+            (ratio.to_bits(), signature)
+        });
+        Some(Sharer {
+            model: model.clone(),
+            tol,
+            step,
         })
+    }
+}
+
+/// For sharing: each point's anchor (`Some(j)`, `j < k`) or `None` (it solves), chosen in
+/// index order (a point is an anchor unless an earlier anchor of the same model matches
+/// it: under IMPL-EX by [`share::steps_match`], else by [`share::strains_close`] and
+/// [`share::states_close`]); `None` when no point's scene asks for sharing.
+fn share_plan<P: BatchPoint>(points: &mut [P], strains: &[[f64; 3]], dtime: f64) -> Option<Plan> {
+    let sharers: Vec<Option<Sharer>> = points
+        .iter_mut()
+        .map(|p| p.with_instance(|i| Sharer::of(i, dtime)).flatten())
         .collect();
-    if models.iter().all(Option::is_none) {
+    if sharers.iter().all(Option::is_none) {
         return None;
     }
     let mut plan = vec![None; points.len()];
     let mut anchors: Vec<usize> = Vec::new();
     for k in 0..points.len() {
-        let Some((model, tol)) = &models[k] else {
+        let Some(me) = &sharers[k] else {
             continue;
         };
         let (left, right) = points.split_at_mut(k);
-        let me = &mut right[0];
-        let found = anchors.iter().copied().find(|&j| {
-            let same = models[j]
-                .as_ref()
-                .is_some_and(|(m, _)| share::same_model(model, m));
-            same && share::strains_close(*tol, &strains[k], &strains[j])
-                && left[j]
-                    .with_instance(|a| {
-                        me.with_instance(|b| {
-                            share::states_close(*tol, b.committed(), a.committed())
+        let point = &mut right[0];
+        let mut matches = |j: usize, a: &Sharer| match (&me.step, &a.step) {
+            (Some((ratio, signature)), Some((ratio_a, signature_a))) => {
+                ratio == ratio_a
+                    && signature.close(signature_a, me.tol, share::secant_scale(&me.model))
+                    && left[j]
+                        .with_instance(|a| {
+                            point
+                                .with_instance(|b| share::steps_match(b.committed(), a.committed()))
                         })
-                    })
-                    .flatten()
-                    .unwrap_or(false)
+                        .flatten()
+                        .unwrap_or(false)
+            }
+            (None, None) => {
+                share::strains_close(me.tol, &strains[k], &strains[j])
+                    && left[j]
+                        .with_instance(|a| {
+                            point.with_instance(|b| {
+                                share::states_close(me.tol, b.committed(), a.committed())
+                            })
+                        })
+                        .flatten()
+                        .unwrap_or(false)
+            }
+            _ => false,
+        };
+        let found = anchors.iter().copied().find(|&j| {
+            sharers[j]
+                .as_ref()
+                .is_some_and(|a| share::same_model(&me.model, &a.model) && matches(j, a))
         });
         match found {
             Some(j) => plan[k] = Some(j),
             None => anchors.push(k),
         }
     }
-    Some(plan)
+    Some(Plan {
+        anchor: plan,
+        sharers,
+    })
+}
+
+/// Each point's anchor (`None`: it solves) and what it was compared by.
+struct Plan {
+    anchor: Vec<Option<usize>>,
+    sharers: Vec<Option<Sharer>>,
 }
 
 /// Solves the points of `mask`, in parallel or on the calling thread.
@@ -362,30 +396,80 @@ fn solve_set<P: BatchPoint>(
     }
 }
 
-/// Follower `k` takes anchor `j`'s answer (`anchor`), corrected to first order, and a
-/// trial derived from the anchor's, unless the error indicator refuses (`None`).
+/// What a follower does after its anchor's solve.
+enum Followed {
+    /// It takes the anchor's answer corrected to first order (its trial is set).
+    Answer(Response),
+    /// It took the anchor's IMPL-EX step and answers on it in the second pass.
+    Step,
+    /// It solves its own RVE in the second pass.
+    Solve,
+}
+
+/// Follower `k` after its anchor `j` answered `anchor`: under IMPL-EX it takes the
+/// anchor's step ([`Instance::adopt_step`]); else the anchor's answer corrected to first
+/// order with a trial of its own ([`share::follows`]), unless the error indicator refuses.
 fn follow<P: BatchPoint>(
     points: &mut [P],
     (k, j): (usize, usize),
     strains: &[[f64; 3]],
     step: BatchStep,
-    indicator: Indicator,
     anchor: &Response,
-) -> Option<Response> {
+) -> Followed {
     let (left, right) = points.split_at_mut(k);
     let (eps, eps_a) = (strains[k], strains[j]);
-    left[j]
-        .with_instance(|a| {
+    let followed = left[j].with_instance(|a| {
+        right[0].with_instance(|b| {
             let tol = share::tolerance(a.model())?;
-            let (switched, grew) = (a.trial_switched(), share::grew(tol, a));
-            if !share::keeps_share(indicator, tol, anchor, &eps_a, &eps, switched, grew) {
-                return None;
+            if let Some((implex_step, ratio)) = a.implex_step() {
+                return b
+                    .adopt_step(implex_step, ratio, step.dtime)
+                    .then_some(Followed::Step);
             }
+            let twin = share::states_close(0.0, b.committed(), a.committed());
             let r = share::corrected(anchor, &eps_a, &eps);
-            let adopt = |b: &mut Instance| b.adopt_trial(a, eps, step.dtime, step.request, r);
-            right[0].with_instance(adopt)?.ok().map(|_| r)
+            match share::follows(tol, anchor, &eps_a, &eps, twin, a.trial_is_still())? {
+                Follow::Twin => b.adopt_trial(a, eps, step.dtime, step.request, r).ok()?,
+                Follow::Own => b.keep_own_trial(eps, step.dtime, step.request, r),
+            }
+            Some(Followed::Answer(r))
         })
-        .flatten()
+    });
+    followed.flatten().flatten().unwrap_or(Followed::Solve)
+}
+
+/// Whether follower `k`, answered `r` on anchor `j`'s adopted IMPL-EX step, keeps it
+/// ([`share::keeps_step`]); when not, the step is dropped and the point solves again.
+fn keeps_step<P: BatchPoint>(
+    points: &mut [P],
+    (k, j): (usize, usize),
+    strain: &[f64; 3],
+    plan: &Plan,
+    r: &Response,
+) -> bool {
+    let (Some(own), Some(theirs)) = (&plan.sharers[k], &plan.sharers[j]) else {
+        return false;
+    };
+    let (Some((_, own_signature)), Some((_, anchor_signature))) = (&own.step, &theirs.step) else {
+        return false;
+    };
+    let (left, right) = points.split_at_mut(k);
+    let kept = left[j].with_instance(|a| {
+        right[0].with_instance(|b| {
+            let Some((step, _)) = b.implex_step() else {
+                return false;
+            };
+            let d =
+                share::step_difference(b.model(), step, own_signature, anchor_signature, strain);
+            let twin = share::states_close(share::ROUND_OFF, b.committed(), a.committed());
+            let kept = share::keeps_step(own.tol, r, &d, b.trial_is_still() || twin);
+            if !kept {
+                b.drop_adopted_step();
+            }
+            kept
+        })
+    });
+    kept.flatten().unwrap_or(false)
 }
 
 /// The sharing batch (see the module documentation): anchors, then followers.
@@ -393,37 +477,59 @@ fn shared<P: BatchPoint>(
     points: &mut [P],
     strains: &[[f64; 3]],
     step: BatchStep,
-    indicator: Indicator,
-    plan: &[Option<usize>],
+    plan: &Plan,
     out: BatchOutputs<'_>,
 ) -> Failures<P::Error> {
     let n = points.len();
-    let anchors: Vec<bool> = plan.iter().map(Option::is_none).collect();
+    let anchors: Vec<bool> = plan.anchor.iter().map(Option::is_none).collect();
     let mut results = solve_set(points, strains, step, &anchors);
-    let mut own = vec![false; n];
+    let mut again = vec![false; n];
     let mut shared_from = vec![None; n];
     for k in 0..n {
-        let Some(j) = plan[k] else {
+        let Some(j) = plan.anchor[k] else {
             continue;
         };
-        let anchor = match &results[j] {
-            Some(Ok(r)) => Some(*r),
-            _ => None,
+        let followed = match &results[j] {
+            Some(Ok(r)) => {
+                let r = *r;
+                follow(points, (k, j), strains, step, &r)
+            }
+            _ => Followed::Solve,
         };
-        match anchor.and_then(|a| follow(points, (k, j), strains, step, indicator, &a)) {
-            Some(r) => {
+        match followed {
+            Followed::Answer(r) => {
                 results[k] = Some(Ok(r));
                 shared_from[k] = Some(j);
             }
-            None => own[k] = true,
+            Followed::Step => {
+                again[k] = true;
+                shared_from[k] = Some(j);
+            }
+            Followed::Solve => again[k] = true,
         }
     }
-    let again = solve_set(points, strains, step, &own);
+    let mut second = solve_set(points, strains, step, &again);
+    // The followers whose adopted step the indicator refuses solve their own.
+    let mut third_set = vec![false; n];
+    for k in 0..n {
+        if let (Some(j), Some(Ok(r))) = (shared_from[k], &second[k]) {
+            if !keeps_step(points, (k, j), &strains[k], plan, r) {
+                third_set[k] = true;
+                shared_from[k] = None;
+            }
+        }
+    }
+    let third = solve_set(points, strains, step, &third_set);
+    for (k, outcome) in third.into_iter().enumerate() {
+        if outcome.is_some() {
+            second[k] = outcome;
+        }
+    }
     let mut tangents = out.tangents.map(|t| t.iter_mut());
     let outs = out.stresses.iter_mut().zip(out.reports.iter_mut());
     let mut failures = Vec::new();
     for (k, ((first, second), (stress, report))) in
-        results.into_iter().zip(again).zip(outs).enumerate()
+        results.into_iter().zip(second).zip(outs).enumerate()
     {
         let tangent = tangents.as_mut().and_then(Iterator::next);
         let outcome = second

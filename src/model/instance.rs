@@ -591,13 +591,14 @@ impl Instance {
         self.model.core_view_of(&self.committed)
     }
 
-    /// Answer sharing (`crate::model::share`): makes `anchor`'s pending trial this
-    /// instance's, moved to this point's own `strain` (and its answer `response`, the
-    /// anchor's corrected to first order), as if this instance had solved it: a commit
-    /// accepts it, a revert drops it. The state is the anchor's trial with `strain`, and
-    /// the fluctuation moved along the anchor's sensitivity, `x = x_a + X_a (eps - eps_a)`
-    /// (kept as it is when the fast path's data says at which strain it holds).
-    /// `NoTrial` when the anchor has no pending trial; nothing changes then.
+    /// Answer sharing between twins (`crate::model::share::Follow::Twin`): makes
+    /// `anchor`'s pending trial this instance's, moved to this point's own `strain` (and its
+    /// answer `response`, the anchor's corrected to first order), as if this instance had
+    /// solved it: a commit accepts it, a revert drops it. The state is the anchor's trial
+    /// with `strain`, and the fluctuation moved along the anchor's sensitivity,
+    /// `x = x_a + X_a (eps - eps_a)` (kept as it is when the fast path's data says at which
+    /// strain it holds). `NoTrial` when the anchor has no pending trial; nothing changes
+    /// then.
     pub fn adopt_trial(
         &mut self,
         anchor: &Instance,
@@ -606,44 +607,69 @@ impl Instance {
         request: TangentRequest,
         response: Response,
     ) -> Result<()> {
-        let source = match (anchor.pending, &anchor.trial) {
-            (Pending::Solved, Some(trial)) => trial,
-            (Pending::Fast(_), _) => &anchor.committed,
+        let (source, from) = match (anchor.pending, &anchor.trial) {
+            (Pending::Solved, Some(trial)) => (&**trial, trial.strain),
+            (Pending::Fast(s), _) => (&anchor.committed, s),
             _ => return Err(Error::NoTrial),
         };
-        let from = match anchor.pending {
-            Pending::Fast(s) => s,
-            _ => source.strain,
-        };
-        let model = &self.model;
-        let trial = self
-            .trial
-            .get_or_insert_with(|| Box::new(model.new_state()));
-        trial.copy_from(source);
-        if matches!(anchor.pending, Pending::Fast(_)) {
-            trial.curvature.valid = false;
-        }
-        if !trial.linear.valid {
-            let step: [f64; 3] = std::array::from_fn(|i| strain[i] - from[i]);
-            let mut moved = vec![0.0; trial.unknowns.len()];
-            if trial.sensitivity.times(&step, &mut moved) {
-                trial
-                    .unknowns
-                    .iter_mut()
-                    .zip(&moved)
-                    .for_each(|(x, d)| *x += d);
-            }
-        }
-        trial.strain = strain;
-        self.pending = Pending::Solved;
-        self.implex_step = None;
-        self.last = Some(LastTrial {
+        let fast = matches!(anchor.pending, Pending::Fast(_));
+        trial_from(&self.model, &mut self.trial, source, (from, strain), fast);
+        self.pending_shared(LastTrial {
             strain,
             dt,
             request,
             response,
         });
         Ok(())
+    }
+
+    /// Answer sharing with a still anchor (`crate::model::share::Follow::Own`): a trial of
+    /// this instance's own committed state at `strain`, history and contact status
+    /// unchanged (as the anchor's increment left the anchor's), the fluctuation moved along
+    /// the committed state's sensitivity, answered by `response` (the anchor's answer
+    /// corrected to first order).
+    pub fn keep_own_trial(
+        &mut self,
+        strain: [f64; 3],
+        dt: f64,
+        request: TangentRequest,
+        response: Response,
+    ) {
+        let committed = &self.committed;
+        let from = committed.strain;
+        trial_from(
+            &self.model,
+            &mut self.trial,
+            committed,
+            (from, strain),
+            true,
+        );
+        self.pending_shared(LastTrial {
+            strain,
+            dt,
+            request,
+            response,
+        });
+    }
+
+    /// A shared trial is pending, answered by `last`.
+    fn pending_shared(&mut self, last: LastTrial) {
+        self.pending = Pending::Solved;
+        self.implex_step = None;
+        self.last = Some(last);
+    }
+
+    /// Whether the pending trial left the interface history and the contact status of the
+    /// committed state as they were, bit for bit (a fast trial does by construction): the
+    /// increment did not damage, open or close anything. False without a trial.
+    pub fn trial_is_still(&self) -> bool {
+        if !self.has_trial() {
+            return false;
+        }
+        let same = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        !self.trial_switched() && same(self.trial_history(), &self.committed.history)
     }
 
     /// The IMPL-EX step the pending trial was answered on (`D_ex`, the jump operators
@@ -659,6 +685,17 @@ impl Instance {
         }
     }
 
+    /// Drops the pending trial answered on a step taken by [`adopt_step`](Self::adopt_step)
+    /// (sharing's indicator refused it): the next update factorizes this instance's own
+    /// step. Nothing else changes.
+    pub fn drop_adopted_step(&mut self) {
+        self.revert();
+        self.implex_step = None;
+        if let Some(trial) = self.trial.as_deref_mut() {
+            trial.linear.invalidate();
+        }
+    }
+
     /// Takes `step`, an IMPL-EX step another instance factorized (its
     /// [`implex_step`](Self::implex_step)) from a committed state close to this one's, as
     /// the step of this instance's committed state for `dt`: the next
@@ -667,13 +704,16 @@ impl Instance {
     /// `A_q eps` and its own committed history (`crate::solver::implex::finish_step`). The
     /// trial's fluctuation is not formed (outputs that need it refuse, as after any
     /// reused step at another strain). `false` (nothing changes): not an IMPL-EX model,
-    /// no fast path, or a step of another ratio than `dt`'s from this committed state.
+    /// no fast path, a step of another ratio than `dt`'s from this committed state, or a
+    /// committed state whose own step carries over (exact, and free).
     pub fn adopt_step(&mut self, step: &crate::state::LinearBranch, ratio: u64, dt: f64) -> bool {
         let own = implex::step_ratio(self.committed.implex.step, dt).to_bits();
+        let carries = (self.lean_implex() && self.carried) || implex::carries_over(&self.committed);
         if self.model.solver.integration != Integration::Implex
             || !self.model.solver.fast_path
             || !step.valid
             || own != ratio
+            || carries
         {
             return false;
         }
@@ -714,6 +754,36 @@ impl Instance {
             + self.trial.as_deref().map_or(0, State::bytes)
             + self.lean_core.as_deref().map_or(0, Core::bytes)
     }
+}
+
+/// A trial made from `source` (a state at strain `from`; `fast`: a committed state, whose
+/// path curvature is not the trial's) in `trial`'s buffers, its fluctuation moved to
+/// `to` along `source`'s sensitivity unless the fast path's data says at which strain it
+/// holds.
+fn trial_from(
+    model: &Model,
+    trial: &mut Option<Box<State>>,
+    source: &State,
+    (from, to): ([f64; 3], [f64; 3]),
+    fast: bool,
+) {
+    let trial = trial.get_or_insert_with(|| Box::new(model.new_state()));
+    trial.copy_from(source);
+    if fast {
+        trial.curvature.valid = false;
+    }
+    if !trial.linear.valid {
+        let step: [f64; 3] = std::array::from_fn(|i| to[i] - from[i]);
+        let mut moved = vec![0.0; trial.unknowns.len()];
+        if trial.sensitivity.times(&step, &mut moved) {
+            trial
+                .unknowns
+                .iter_mut()
+                .zip(&moved)
+                .for_each(|(x, d)| *x += d);
+        }
+    }
+    trial.strain = to;
 }
 
 thread_local! {

@@ -57,6 +57,8 @@ pub struct Model {
     pub(crate) fingerprint: u64,
     /// `STATEV` entries a host needs for this model's state (`Model::statev_len`).
     pub(crate) statev_len: usize,
+    /// The unit of IMPL-EX step sharing's similarity (`share::secant_scale`).
+    pub(crate) secant_scale: f64,
 }
 
 impl std::fmt::Debug for Model {
@@ -114,6 +116,7 @@ impl Model {
             elastic_sensitivity: Vec::new(),
             fingerprint: scene_fingerprint(scene)?,
             statev_len: 0,
+            secant_scale: 0.0,
         };
         model.statev_len = statev::values_needed(
             model.state_sizes(),
@@ -134,6 +137,7 @@ impl Model {
         model.elastic_tangent = response.tangent;
         model.elastic_s_zz_tangent = response.s_zz_tangent;
         model.elastic_sensitivity = ws.factorization().kg().iter().map(|v| -v).collect();
+        model.secant_scale = super::share::virgin_secant_scale(&model);
         Ok(model)
     }
 

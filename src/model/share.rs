@@ -1,48 +1,53 @@
 //! Answer sharing with error control (`[solver] share_tolerance`, `docs/sharing.md`):
 //! within one host increment, a point close to a point already solved (its *anchor*)
-//! takes the anchor's answer corrected to first order instead of solving its own RVE.
-//! The idea is that of the adaptivity of preCICE's Micro-Manager (Desai, Uekermann et
-//! al.: micro simulations activated and deactivated by the similarity of their states),
+//! takes the anchor's answer, or the anchor's IMPL-EX step, instead of solving its own
+//! RVE. The idea is that of the adaptivity of preCICE's Micro-Manager (Desai, Uekermann
+//! et al.: micro simulations activated and deactivated by the similarity of their states),
 //! here per increment and with a correction.
 //!
-//! **Similarity.** With `tol` = `share_tolerance`, a point (committed state `C`, strain
-//! `eps`) matches an anchor (`C_a`, `eps_a`) of the same model (the same scene, `PROPS`
-//! and integration: the same [`Model`], checked by identity and fingerprint) when
-//! - the contact status of every ITZ point is the same, bit for bit (the held points of
-//!   implicit integration, the closed points and the frozen-start flag of IMPL-EX) and
-//!   IMPL-EX's last step `dt_n` is the same;
-//! - the interface histories agree: `|h - h_a|_inf <= tol max(|h_a|_inf, H_FLOOR)`, and
-//!   so do IMPL-EX's previous histories `h_{n-1}`;
+//! **The invariant that bounds the error.** A follower never keeps another point's
+//! history. Whatever it takes from its anchor, the history and contact status it commits
+//! are the ones its own solve would have formed from its own committed state (or, for
+//! twins, the same to round-off). So the difference from the point's exact run is that of
+//! one increment's answer, bounded by the indicator below, and does not build up over the
+//! increments: a follower whose path departs from its neighbours' solves itself again,
+//! from its own state. (Until 0.3 a follower took the anchor's trial history when the
+//! anchor's growth stayed under `tol`: over many fine increments it ratcheted up to the
+//! anchor's, and the error grew to many times `tol`.)
+//!
+//! **Implicit integration: answer sharing.** With `tol` = `share_tolerance`, a point
+//! (committed state `C`, strain `eps`) matches an anchor (`C_a`, `eps_a`) of the same model
+//! (the same scene, `PROPS` and integration: the same [`Model`], checked by identity and
+//! fingerprint) when
+//! - the contact status of every ITZ point is the same, bit for bit;
+//! - the interface histories agree: `|h - h_a|_inf <= tol max(|h_a|_inf, H_FLOOR)`;
 //! - the strains agree: `|eps - eps_a|_inf <= tol max(|eps_a|_inf, STRAIN_FLOOR)`.
 //!
-//! IMPL-EX step sharing in `STATEV` mode compares what the step freezes instead of the
-//! histories ([`StepSignature`]): the same contact status, `dt_n` and step ratio, and
-//! every ITZ point's frozen secant within `tol` times the virgin ITZ stiffness. No
-//! strain condition: the step is linear in the strain.
+//! Its answer is the anchor's to first order in the strain, `sigma = sigma_a + D_a (eps -
+//! eps_a)`, `s_zz` alike, the tangent `D_a`, when the error indicator ([`follows`]) allows:
+//! the anchor converged reliably (not sub-stepped, not above `step_tolerance`), the
+//! first-order term is small, `|D_a (eps - eps_a)|_inf <= tol max(|sigma_a|_inf, |D_a|_inf
+//! STRAIN_FLOOR)`, and either the anchor's increment left its history and contact status
+//! unchanged bit for bit (elastic, unloading or closed: [`Follow::Own`], the follower's
+//! trial is its own committed state at `eps`), or the two are twins ([`Follow::Twin`]: the
+//! same committed state bit for bit, the same strain to round-off; the follower's trial is
+//! the anchor's, [`Instance::adopt_trial`](super::Instance::adopt_trial)). A damaging anchor lends nothing else.
 //!
-//! **Correction.** The follower's answer is the anchor's to first order in the strain,
-//! `sigma = sigma_a + D_a (eps - eps_a)`, `s_zz = s_zz,a + d s_zz,a (eps - eps_a)`, its
-//! tangent `D_a`; its trial state is the anchor's trial moved to `eps`
-//! ([`Instance::adopt_trial`]; in `STATEV` mode with implicit integration the anchor's
-//! written core with the follower's strain), so that the state a host keeps carries the
-//! point's own strain. In `STATEV` mode under IMPL-EX the UMAT shares the anchor's step
-//! instead ([`Instance::adopt_step`]): the follower answers on it and forms its own trial.
-//! The error left is of second order in `eps - eps_a` plus first order in the history
-//! difference `h - h_a`, both bounded by `tol` above.
+//! **IMPL-EX: step sharing.** Under IMPL-EX the RVE of a step is linear; its matrix
+//! `K_ex` is frozen at the extrapolated history. A point whose step freezes what the
+//! anchor's froze ([`StepSignature`]: the same contact status, `dt_n` and step ratio, and
+//! every ITZ point's frozen secant within `tol` times the virgin ITZ stiffness) takes the
+//! anchor's factorized step ([`Instance::adopt_step`](super::Instance::adopt_step)) and answers on it itself: its
+//! stress `D_ex eps`, its trial history formed from its own committed history and the
+//! jumps at its own strain. No strain condition: the step is linear in the strain.
 //!
-//! **Error indicator** ([`Indicator`]): after the anchor is solved, a follower gets its
-//! own solve back when the anchor failed or was not [`Reliable`](super::Reliability)
-//! (sub-stepped, or its answer depends on the increment's size), and, by default
-//! ([`Indicator::FirstOrder`]), when the first-order term is large:
-//! `|D_a (eps - eps_a)|_inf > tol max(|sigma_a|_inf, |D_a|_inf STRAIN_FLOOR)`: a softening
-//! anchor, whose stress is small against its tangent's reach, does not lend its answer.
-//! [`Indicator::Branch`] also refuses an anchor whose increment switched the contact
-//! status of an ITZ point (the follower may lie on the other side of the switch).
+//! Both are used by the batch ([`super::batch`]) and by the UMAT's `STATEV` mode
+//! (`crate::host`).
 
-use super::{Instance, Model, Response};
+use super::{Model, Response};
 use crate::interface::InterfaceLaw;
 use crate::state::statev::CoreView;
-use crate::state::{Core, State};
+use crate::state::{Core, LinearBranch, State, JUMP_OPERATOR_LEN};
 
 /// The strain scale below which strains count as equal to within `tol` times it: a tenth
 /// of the paper's concrete's tensile peak strain (about 1.3e-4), so that points near zero
@@ -59,22 +64,18 @@ pub const H_FLOOR: f64 = 4e-6;
 /// lends its answer to a point at its own strain (CalculiX's twin point layers).
 pub const ROUND_OFF: f64 = 1e-9;
 
-/// When a follower gets its own solve back (measured in `docs/sharing.md`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Indicator {
-    /// Only when the anchor failed or was not reliable.
-    Plain,
-    /// Also when the first-order term is large against the anchor's stress.
-    FirstOrder,
-    /// Also when the anchor's increment switched an ITZ point's contact status.
-    Branch,
-    /// [`Indicator::FirstOrder`], and also when the anchor's increment grew its interface
-    /// history by more than `tol` times its size (the anchor is damaging: the follower's
-    /// own growth, which the first-order correction does not carry, would differ) and the
-    /// strains differ beyond round-off ([`ROUND_OFF`]). The default: the one measured to
-    /// stay within `tol` of the exact run (`docs/sharing.md`).
-    #[default]
-    History,
+/// How a follower forms its trial state once the error indicator lets it share
+/// ([`follows`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Follow {
+    /// The anchor's trial, moved to the follower's strain: the two committed states are
+    /// the same bit for bit and the strains the same to round-off ([`ROUND_OFF`]), so the
+    /// anchor's trial is the follower's own to round-off, whatever the anchor's increment
+    /// did (CalculiX's twin point layers).
+    Twin,
+    /// The follower's own committed state at its own strain: history and contact status
+    /// its own, unchanged, as the anchor's increment left the anchor's unchanged.
+    Own,
 }
 
 /// The sharing tolerance of `model`'s scene (`None`: no sharing).
@@ -119,6 +120,15 @@ pub fn states_close(tol: f64, point: &State, anchor: &State) -> bool {
             &anchor.implex.previous,
             H_FLOOR,
         )
+}
+
+/// Whether two committed states' IMPL-EX steps freeze the same discrete part: the same
+/// contact status, frozen-start flag and `dt_n`, bit for bit (their secants are compared
+/// by [`StepSignature::close`]).
+pub fn steps_match(point: &State, anchor: &State) -> bool {
+    point.implex.closed == anchor.implex.closed
+        && point.implex.at_start == anchor.implex.at_start
+        && point.implex.step.to_bits() == anchor.implex.step.to_bits()
 }
 
 /// [`states_close`] for two `STATEV` cores (the UMAT's table, `crate::host`).
@@ -166,9 +176,77 @@ impl StepSignature {
     }
 }
 
+/// The first-order difference between the stress a point answers on an adopted IMPL-EX
+/// `step` (the anchor's, whose frozen secants are `anchor`'s) at `strain` and the stress
+/// it would answer on its own step (secants `own`): the homogenized stiffness is the
+/// minimum of the cell's energy over the fluctuations, so its derivative in one interface
+/// point's secant is that point's energy at the minimizer (the envelope theorem), and
+/// ```text
+/// delta_sigma = 1/V sum_q w_q A_q^T (S_q - S_q,a) A_q eps,   w_q = w_i l_e / 2,
+/// ```
+/// with `A_q` the step's jump operators (`LinearBranch::jumps`, the jumps per unit
+/// macro strain). Of second order in `S - S_a`; exact for one point in series with a
+/// stiffer rest. Zeros when the step has no jump operators.
+pub fn step_difference(
+    model: &Model,
+    step: &LinearBranch,
+    own: &StepSignature,
+    anchor: &StepSignature,
+    strain: &[f64; 3],
+) -> [f64; 3] {
+    let disc = &model.disc;
+    let np = disc.points_per_interface();
+    let points = disc.interface_points();
+    let mut out = [0.0; 3];
+    if step.jumps.len() != JUMP_OPERATOR_LEN * points
+        || own.secants.len() != 4 * points
+        || anchor.secants.len() != 4 * points
+    {
+        return out;
+    }
+    let rule = disc.quadrature.rule();
+    for q in 0..points {
+        let a = &step.jumps[JUMP_OPERATOR_LEN * q..JUMP_OPERATOR_LEN * (q + 1)];
+        let row = |r: usize| -> [f64; 3] { std::array::from_fn(|j| f64::from(a[3 * r + j])) };
+        let (s_row, n_row) = (row(0), row(1));
+        let jump = [
+            (0..3).map(|j| s_row[j] * strain[j]).sum::<f64>(),
+            (0..3).map(|j| n_row[j] * strain[j]).sum::<f64>(),
+        ];
+        // Column-major 2 x 2 (nalgebra's order in the signature).
+        let d = |k: usize| f64::from(own.secants[4 * q + k]) - f64::from(anchor.secants[4 * q + k]);
+        let traction = [
+            d(0) * jump[0] + d(2) * jump[1],
+            d(1) * jump[0] + d(3) * jump[1],
+        ];
+        let w = rule[q % np].1 * disc.interfaces[q / np].length / 2.0;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += w * (s_row[i] * traction[0] + n_row[i] * traction[1]);
+        }
+    }
+    out.map(|v| v / disc.volume)
+}
+
+/// Whether a point keeps the IMPL-EX step it adopted and answered `response` on: its
+/// step's first-order difference ([`step_difference`]) is within `tol` of its stress
+/// (`|delta_sigma|_inf <= tol max(|sigma|_inf, |D|_inf STRAIN_FLOOR)`), and `own_history`:
+/// the step left its history and contact status unchanged, or its committed state is the
+/// anchor's to round-off. A damaging step of another point is not kept: the history it
+/// would form follows the anchor's stiffness, and over the increments it would drift
+/// towards the anchor's path (module documentation).
+pub fn keeps_step(tol: f64, response: &Response, difference: &[f64; 3], own_history: bool) -> bool {
+    let reach = tol * norm(&response.stress).max(norm(&response.tangent) * STRAIN_FLOOR);
+    own_history && norm(difference) <= reach
+}
+
 /// The scale of [`StepSignature::close`]: the largest entry of the virgin RVE's open
 /// secants (the ITZ's initial stiffness for the paper's law); 0 without an interface.
 pub fn secant_scale(model: &Model) -> f64 {
+    model.secant_scale
+}
+
+/// [`secant_scale`], computed once when the model is built.
+pub(super) fn virgin_secant_scale(model: &Model) -> f64 {
     let virgin = model.new_state();
     let secants = point_secants(model, |q, _, out| {
         out.copy_from_slice(&virgin.history[q * out.len()..(q + 1) * out.len()]);
@@ -229,54 +307,38 @@ pub fn corrected(anchor: &Response, anchor_strain: &[f64; 3], eps: &[f64; 3]) ->
     r
 }
 
-/// Whether a follower at `eps` may keep the anchor's answer (the error indicator; see
-/// the module documentation). `switched`: the anchor's increment switched a contact
-/// status; `grew`: it grew its history ([`grew`]).
-pub fn keeps_share(
-    indicator: Indicator,
+/// The error indicator (see the module documentation): whether a follower at `eps` may
+/// take the anchor's answer, and how it forms its trial. `twin`: the follower's committed
+/// state is the anchor's bit for bit; `still`: the anchor's increment left its interface
+/// history and contact status as they were, bit for bit
+/// ([`Instance::trial_is_still`](super::Instance::trial_is_still)).
+/// `None`: the follower solves its own RVE.
+pub fn follows(
     tol: f64,
     anchor: &Response,
     anchor_strain: &[f64; 3],
     eps: &[f64; 3],
-    switched: bool,
-    grew: bool,
-) -> bool {
+    twin: bool,
+    still: bool,
+) -> Option<Follow> {
     let report = &anchor.report;
     if report.substepped() || report.step_too_large || report.exceeds_tolerance() {
-        return false;
-    }
-    if indicator == Indicator::Plain {
-        return true;
+        return None;
     }
     let d: [f64; 3] = std::array::from_fn(|i| eps[i] - anchor_strain[i]);
     let term: [f64; 3] =
         std::array::from_fn(|i| (0..3).map(|j| anchor.tangent[3 * i + j] * d[j]).sum());
     let reach = tol * norm(&anchor.stress).max(norm(&anchor.tangent) * STRAIN_FLOOR);
     if norm(&term) > reach {
-        return false;
+        return None;
     }
-    match indicator {
-        Indicator::Branch => !switched,
-        Indicator::History => !grew || norm(&d) <= ROUND_OFF * norm(anchor_strain),
-        _ => true,
+    if twin && norm(&d) <= ROUND_OFF * norm(anchor_strain) {
+        Some(Follow::Twin)
+    } else if still {
+        Some(Follow::Own)
+    } else {
+        None
     }
-}
-
-/// Whether `instance`'s pending trial grew its interface history beyond `tol` times
-/// its size ([`H_FLOOR`] at least) against the committed state.
-pub fn grew(tol: f64, instance: &Instance) -> bool {
-    !close(
-        tol,
-        instance.trial_history(),
-        &instance.committed().history,
-        H_FLOOR,
-    )
-}
-
-/// Whether `instance`'s pending trial switched the contact status of an ITZ point
-/// against its committed state (held or, with IMPL-EX, closed points).
-pub fn switched(instance: &Instance) -> bool {
-    instance.trial_switched()
 }
 
 /// Solved and shared points of a batch (from its reports' `shared_from`).

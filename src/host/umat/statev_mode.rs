@@ -305,10 +305,20 @@ impl Umat {
         check_start_strain(p, c, virgin, timed)?;
         p.statev.trial_hash = None;
         let request = p.material.tangent;
-        let step = may_share.then(|| self.shared_step(p, c)).flatten();
-        let r = with_workspace(&model, |ws| {
-            p.instance.update_timed(strain, c.dtime, ws, request)
-        })?;
+        let mut step = may_share.then(|| self.shared_step(p, c)).flatten();
+        let update = |p: &mut Point| {
+            with_workspace(&model, |ws| {
+                p.instance.update_timed(strain, c.dtime, ws, request)
+            })
+        };
+        let mut r = update(p)?;
+        if let Some(lookup) = step.as_mut().filter(|l| l.adopted.is_some()) {
+            if !keeps_step(p, lookup, &strain, &r) {
+                p.instance.drop_adopted_step();
+                lookup.adopted = None;
+                r = update(p)?;
+            }
+        }
         p.statev.trial_time = timed.then(|| c.time[1] + c.dtime);
         let trial_hash = with_written(statev.len(), |written| {
             p.write_trial(written).map(|()| values_hash(written))
@@ -356,14 +366,14 @@ impl Umat {
         let ratio = ratio.to_bits();
         let found =
             (self.share).follow_step(&model, increment_key(c), tol, (&core, ratio, &signature));
-        let adopted = found.is_some_and(|s| p.instance.adopt_step(&s.step, ratio, c.dtime));
+        let adopted = found.filter(|s| p.instance.adopt_step(&s.step, ratio, c.dtime));
         Some(StepLookup { signature, adopted })
     }
 
     /// After an update of [`Umat::shared_step`]: counts the call, and records the step a
     /// call that factorized it solved; returns whether the call solved.
     fn step_shared(&self, p: &Point, c: &UmatCall, lookup: StepLookup, r: &Response) -> bool {
-        if lookup.adopted {
+        if lookup.adopted.is_some() {
             self.shared.fetch_add(1, Ordering::Relaxed);
             return false;
         }
@@ -391,11 +401,27 @@ impl Umat {
 }
 
 /// What [`Umat::shared_step`] looked up: the signature of the point's step (recorded with
-/// the step and the committed core if the point factorizes it), and whether a step was
-/// adopted.
+/// the step and the committed core if the point factorizes it), and the step adopted.
 struct StepLookup {
     signature: StepSignature,
-    adopted: bool,
+    adopted: Option<Arc<Step>>,
+}
+
+/// Whether a point answered `r` on the step it adopted keeps it: the error indicator of
+/// step sharing ([`share::keeps_step`]), with the point's committed core the step's to
+/// round-off counting as its own history.
+fn keeps_step(p: &Point, lookup: &StepLookup, strain: &[f64; 3], r: &Response) -> bool {
+    let (Some(found), Some(tol)) = (&lookup.adopted, sharing(p)) else {
+        return false;
+    };
+    let Some((step, _)) = p.instance.implex_step() else {
+        return false;
+    };
+    let model = &p.material.model;
+    let d = share::step_difference(model, step, &lookup.signature, &found.signature, strain);
+    let committed = p.instance.committed_core();
+    let twin = share::cores_close(share::ROUND_OFF, &committed, &found.committed);
+    share::keeps_step(tol, r, &d, p.instance.trial_is_still() || twin)
 }
 
 /// The sharing tolerance of the point's material, when it shares: `[solver]
