@@ -38,10 +38,12 @@ pub(super) struct Anchor {
 /// factorized from, the step (`Instance::implex_step`) and what it froze.
 pub(super) struct Step {
     pub committed: Core,
+    /// The strain of the call that factorized it.
+    pub strain: [f64; 3],
     pub step: LinearBranch,
     /// The step ratio `dt / dt_n` (bits) it was factorized for.
     pub ratio: u64,
-    pub signature: StepSignature,
+    pub signature: Arc<StepSignature>,
 }
 
 /// The key of a core's discrete part (contact status, `at_start`, `dt_n`): the steps of
@@ -198,18 +200,16 @@ impl ShareTable {
         (core, strain, time): (&Core, [f64; 3], Option<f64>),
     ) -> Option<(Response, Core)> {
         self.with(model, key, |inc| {
-            let anchor = inc.anchors.iter().find(|a| {
-                share::strains_close(tol, &strain, &a.strain)
-                    && share::cores_close(tol, core, &a.committed)
+            // The first anchor that matches and whose indicator lets the point follow.
+            let (anchor, follow) = inc.anchors.iter().find_map(|a| {
+                let matches = share::strains_close(tol, &strain, &a.strain)
+                    && share::cores_close(tol, core, &a.committed);
+                let still = a.trial.closed == a.committed.closed
+                    && share::same_bits(&a.trial.history, &a.committed.history);
+                let twin = share::cores_close(0.0, core, &a.committed);
+                let follow = share::follows(tol, &a.response, &a.strain, &strain, twin, still);
+                follow.filter(|_| matches).map(|f| (a, f))
             })?;
-            let same = |a: &[f64], b: &[f64]| {
-                a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-            };
-            let still = anchor.trial.closed == anchor.committed.closed
-                && same(&anchor.trial.history, &anchor.committed.history);
-            let twin = share::cores_close(0.0, core, &anchor.committed);
-            let follow =
-                share::follows(tol, &anchor.response, &anchor.strain, &strain, twin, still)?;
             let response = share::corrected(&anchor.response, &anchor.strain, &strain);
             let mut written = match follow {
                 Follow::Twin => anchor.trial.clone(),
@@ -233,7 +233,7 @@ impl ShareTable {
     /// IMPL-EX step sharing: the step factorized in this increment from the committed core
     /// `core` (bit for bit), else one that froze secants within `tol` of `signature` (the
     /// core's at step ratio `ratio`; [`Increment::find_step`]) (`None`: the point
-    /// factorizes its own). Counts a shared call when found.
+    /// factorizes its own); [`count_shared`](Self::count_shared) counts it once kept.
     pub fn follow_step(
         &self,
         model: &Arc<Model>,
@@ -242,11 +242,12 @@ impl ShareTable {
         wanted: (&CoreView<'_>, u64, &StepSignature),
     ) -> Option<Arc<Step>> {
         let keys = Keys::of(wanted.0);
-        self.with(model, key, |inc| {
-            let found = inc.find_step(tol, wanted, keys)?;
-            inc.shared += 1;
-            Some(found)
-        })
+        self.with(model, key, |inc| inc.find_step(tol, wanted, keys))
+    }
+
+    /// Counts a call that kept a step found by [`follow_step`](Self::follow_step).
+    pub fn count_shared(&self, model: &Arc<Model>, key: IncrementKey) {
+        self.with(model, key, |inc| inc.shared += 1);
     }
 
     /// Records a step factorized in the increment (a solved call).

@@ -26,11 +26,12 @@ use std::sync::{Arc, LazyLock, Mutex};
 use rayon::iter::Either;
 use rayon::prelude::*;
 
-use super::share::{self, Follow, StepSignature};
+use super::share::{self, AdoptedStep, Follow, StepSignature};
 use super::workspaces::with_workspace;
 use super::{Instance, Model, Response};
 use crate::error::{Error, Result};
 use crate::solver::{implex, Integration, TangentRequest};
+use crate::state::State;
 
 /// How far to trust an update (MGIS-style).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -285,7 +286,7 @@ type Outcome<E> = Option<std::result::Result<Response, E>>;
 struct Sharer {
     model: Arc<Model>,
     tol: f64,
-    step: Option<(u64, StepSignature)>,
+    step: Option<(u64, Arc<StepSignature>)>,
 }
 
 impl Sharer {
@@ -297,7 +298,7 @@ impl Sharer {
         let step = (solver.integration == Integration::Implex && solver.fast_path).then(|| {
             let ratio = implex::step_ratio(instance.committed().implex.step, dtime);
             let signature = StepSignature::of(model, &instance.committed_core_view(), ratio);
-            (ratio.to_bits(), signature)
+            (ratio.to_bits(), Arc::new(signature))
         });
         Some(Sharer {
             model: model.clone(),
@@ -327,36 +328,45 @@ fn share_plan<P: BatchPoint>(points: &mut [P], strains: &[[f64; 3]], dtime: f64)
         };
         let (left, right) = points.split_at_mut(k);
         let point = &mut right[0];
-        let mut matches = |j: usize, a: &Sharer| match (&me.step, &a.step) {
-            (Some((ratio, signature)), Some((ratio_a, signature_a))) => {
-                ratio == ratio_a
-                    && signature.close(signature_a, me.tol, share::secant_scale(&me.model))
-                    && left[j]
-                        .with_instance(|a| {
-                            point
-                                .with_instance(|b| share::steps_match(b.committed(), a.committed()))
+        // `twin`: the committed states the same to round-off (IMPL-EX) or bit for bit and
+        // the strains the same to round-off (implicit), which is tried first: a twin may
+        // follow where another point may not (`share::follows`, `share::keeps_step`).
+        let mut matches = |j: usize, a: &Sharer, twin: bool| {
+            let mut both = |f: &dyn Fn(&State, &State) -> bool| {
+                let pair = left[j]
+                    .with_instance(|a| point.with_instance(|b| f(b.committed(), a.committed())));
+                pair.flatten().unwrap_or(false)
+            };
+            match (&me.step, &a.step) {
+                (Some((ratio, signature)), Some((ratio_a, signature_a))) => {
+                    let scale = share::secant_scale(&me.model);
+                    ratio == ratio_a
+                        && signature.close(signature_a, me.tol, scale)
+                        && both(&|b, a| {
+                            share::steps_match(b, a)
+                                && (!twin || share::states_close(share::ROUND_OFF, b, a))
                         })
-                        .flatten()
-                        .unwrap_or(false)
+                }
+                (None, None) => {
+                    let (tol, strain_tol) = if twin {
+                        (0.0, share::ROUND_OFF)
+                    } else {
+                        (me.tol, me.tol)
+                    };
+                    share::strains_close(strain_tol, &strains[k], &strains[j])
+                        && both(&|b, a| share::states_close(tol, b, a))
+                }
+                _ => false,
             }
-            (None, None) => {
-                share::strains_close(me.tol, &strains[k], &strains[j])
-                    && left[j]
-                        .with_instance(|a| {
-                            point.with_instance(|b| {
-                                share::states_close(me.tol, b.committed(), a.committed())
-                            })
-                        })
-                        .flatten()
-                        .unwrap_or(false)
-            }
-            _ => false,
         };
-        let found = anchors.iter().copied().find(|&j| {
-            sharers[j]
-                .as_ref()
-                .is_some_and(|a| share::same_model(&me.model, &a.model) && matches(j, a))
-        });
+        let mut find = |twin: bool| {
+            anchors.iter().copied().find(|&j| {
+                sharers[j]
+                    .as_ref()
+                    .is_some_and(|a| share::same_model(&me.model, &a.model) && matches(j, a, twin))
+            })
+        };
+        let found = find(true).or_else(|| find(false));
         match found {
             Some(j) => plan[k] = Some(j),
             None => anchors.push(k),
@@ -413,18 +423,25 @@ fn follow<P: BatchPoint>(
     points: &mut [P],
     (k, j): (usize, usize),
     strains: &[[f64; 3]],
-    step: BatchStep,
+    (step, plan): (BatchStep, &Plan),
     anchor: &Response,
 ) -> Followed {
     let (left, right) = points.split_at_mut(k);
     let (eps, eps_a) = (strains[k], strains[j]);
+    let signature = |p: usize| plan.sharers[p].as_ref().and_then(|s| s.step.as_ref());
     let followed = left[j].with_instance(|a| {
         right[0].with_instance(|b| {
             let tol = share::tolerance(a.model())?;
             if let Some((implex_step, ratio)) = a.implex_step() {
-                return b
-                    .adopt_step(implex_step, ratio, step.dtime)
-                    .then_some(Followed::Step);
+                let ((_, own), (_, theirs)) = (signature(k)?, signature(j)?);
+                let adopted = AdoptedStep {
+                    own: own.clone(),
+                    anchor: theirs.clone(),
+                    anchor_strain: eps_a,
+                    twin: share::states_close(share::ROUND_OFF, b.committed(), a.committed()),
+                };
+                let taken = b.adopt_step(implex_step, ratio, step.dtime, adopted);
+                return taken.then_some(Followed::Step);
             }
             let twin = share::states_close(0.0, b.committed(), a.committed());
             let r = share::corrected(anchor, &eps_a, &eps);
@@ -436,40 +453,6 @@ fn follow<P: BatchPoint>(
         })
     });
     followed.flatten().flatten().unwrap_or(Followed::Solve)
-}
-
-/// Whether follower `k`, answered `r` on anchor `j`'s adopted IMPL-EX step, keeps it
-/// ([`share::keeps_step`]); when not, the step is dropped and the point solves again.
-fn keeps_step<P: BatchPoint>(
-    points: &mut [P],
-    (k, j): (usize, usize),
-    strain: &[f64; 3],
-    plan: &Plan,
-    r: &Response,
-) -> bool {
-    let (Some(own), Some(theirs)) = (&plan.sharers[k], &plan.sharers[j]) else {
-        return false;
-    };
-    let (Some((_, own_signature)), Some((_, anchor_signature))) = (&own.step, &theirs.step) else {
-        return false;
-    };
-    let (left, right) = points.split_at_mut(k);
-    let kept = left[j].with_instance(|a| {
-        right[0].with_instance(|b| {
-            let Some((step, _)) = b.implex_step() else {
-                return false;
-            };
-            let d =
-                share::step_difference(b.model(), step, own_signature, anchor_signature, strain);
-            let twin = share::states_close(share::ROUND_OFF, b.committed(), a.committed());
-            let kept = share::keeps_step(own.tol, r, &d, b.trial_is_still() || twin);
-            if !kept {
-                b.drop_adopted_step();
-            }
-            kept
-        })
-    });
-    kept.flatten().unwrap_or(false)
 }
 
 /// The sharing batch (see the module documentation): anchors, then followers.
@@ -492,7 +475,7 @@ fn shared<P: BatchPoint>(
         let followed = match &results[j] {
             Some(Ok(r)) => {
                 let r = *r;
-                follow(points, (k, j), strains, step, &r)
+                follow(points, (k, j), strains, (step, plan), &r)
             }
             _ => Followed::Solve,
         };
@@ -508,21 +491,15 @@ fn shared<P: BatchPoint>(
             Followed::Solve => again[k] = true,
         }
     }
-    let mut second = solve_set(points, strains, step, &again);
-    // The followers whose adopted step the indicator refuses solve their own.
-    let mut third_set = vec![false; n];
-    for k in 0..n {
-        if let (Some(j), Some(Ok(r))) = (shared_from[k], &second[k]) {
-            if !keeps_step(points, (k, j), &strains[k], plan, r) {
-                third_set[k] = true;
-                shared_from[k] = None;
+    let second = solve_set(points, strains, step, &again);
+    // A follower whose adopted step the indicator refused (`Instance::implex`) solved its
+    // own.
+    for (k, from) in shared_from.iter_mut().enumerate() {
+        if second[k].is_some() && from.is_some() {
+            let kept = points[k].with_instance(|b| b.on_adopted_step());
+            if kept != Some(true) {
+                *from = None;
             }
-        }
-    }
-    let third = solve_set(points, strains, step, &third_set);
-    for (k, outcome) in third.into_iter().enumerate() {
-        if outcome.is_some() {
-            second[k] = outcome;
         }
     }
     let mut tangents = out.tangents.map(|t| t.iter_mut());

@@ -8,6 +8,7 @@ use std::cell::RefCell;
 use std::sync::Arc;
 
 use super::rve_model::{Model, Response};
+use super::share::AdoptedStep;
 use crate::error::{Error, Result};
 use crate::solver::{implex, Answer, Integration, TangentRequest, Workspace};
 use crate::state::persist::{self, StateSizes};
@@ -68,6 +69,9 @@ pub struct Instance {
     /// With IMPL-EX integration: the step ratio (bits) whose step of the committed state
     /// `trial.linear` holds, if any (see [`Model::implex_update`]).
     implex_step: Option<u64>,
+    /// The step `trial.linear` holds was another point's ([`adopt_step`](Self::adopt_step)):
+    /// every answer on it is judged by sharing's indicator, and a commit does not carry it.
+    adopted: Option<Box<AdoptedStep>>,
     /// Commits of a trial whose error estimate exceeded `solver.step_tolerance` (the host
     /// kept an increment it was asked to redo smaller), and the last one's estimate.
     ignored_redos: (u64, f64),
@@ -111,6 +115,7 @@ impl Instance {
             last: None,
             fast_updates: 0,
             implex_step: None,
+            adopted: None,
             ignored_redos: (0, 0.0),
             exceeded: None,
         }
@@ -329,10 +334,24 @@ impl Instance {
             trial.linear.copy_from(&self.committed.linear);
             trial.unknowns.copy_from_slice(&self.committed.unknowns);
         }
+        if !reuse {
+            self.adopted = None;
+        }
         let reuse = reuse || carry;
         self.implex_step = None;
         let mut response = model.implex_update(&self.committed, strain, dt, ws, trial, reuse)?;
         self.implex_step = Some(ratio);
+        if let Some(adopted) = self.adopted.as_deref() {
+            let still = super::share::same_bits(&trial.history, &self.committed.history)
+                && trial.implex.closed == self.committed.implex.closed;
+            if !adopted.keeps(model, &trial.linear, &strain, &response, still) {
+                // The anchor's step is refused here: this point factorizes its own.
+                self.adopted = None;
+                self.implex_step = None;
+                trial.linear.invalidate();
+                return self.implex(strain, dt, ws, request);
+            }
+        }
         self.judge(dt, &mut response.report);
         if reuse {
             self.fast_updates += 1;
@@ -399,6 +418,11 @@ impl Instance {
                 std::mem::swap(&mut self.committed, trial);
                 self.implex_step = None;
                 self.carried = false;
+                if self.adopted.take().is_some() {
+                    // Another point's step: the next step is this point's own (or
+                    // another adopted one, judged again), never a carry of this one.
+                    self.committed.linear.invalidate();
+                }
             }
             (Pending::Fast(strain), _) => {
                 // The state at the new strain: same history, unknowns lazy (see
@@ -429,6 +453,7 @@ impl Instance {
         self.committed = new_state(&self.model, self.lean_implex());
         self.trial = None;
         self.implex_step = None;
+        self.adopted = None;
         self.carried = false;
         self.revert();
     }
@@ -666,10 +691,8 @@ impl Instance {
         if !self.has_trial() {
             return false;
         }
-        let same = |a: &[f64], b: &[f64]| {
-            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-        };
-        !self.trial_switched() && same(self.trial_history(), &self.committed.history)
+        !self.trial_switched()
+            && super::share::same_bits(self.trial_history(), &self.committed.history)
     }
 
     /// The IMPL-EX step the pending trial was answered on (`D_ex`, the jump operators
@@ -685,17 +708,6 @@ impl Instance {
         }
     }
 
-    /// Drops the pending trial answered on a step taken by [`adopt_step`](Self::adopt_step)
-    /// (sharing's indicator refused it): the next update factorizes this instance's own
-    /// step. Nothing else changes.
-    pub fn drop_adopted_step(&mut self) {
-        self.revert();
-        self.implex_step = None;
-        if let Some(trial) = self.trial.as_deref_mut() {
-            trial.linear.invalidate();
-        }
-    }
-
     /// Takes `step`, an IMPL-EX step another instance factorized (its
     /// [`implex_step`](Self::implex_step)) from a committed state close to this one's, as
     /// the step of this instance's committed state for `dt`: the next
@@ -706,7 +718,13 @@ impl Instance {
     /// reused step at another strain). `false` (nothing changes): not an IMPL-EX model,
     /// no fast path, a step of another ratio than `dt`'s from this committed state, or a
     /// committed state whose own step carries over (exact, and free).
-    pub fn adopt_step(&mut self, step: &crate::state::LinearBranch, ratio: u64, dt: f64) -> bool {
+    pub fn adopt_step(
+        &mut self,
+        step: &crate::state::LinearBranch,
+        ratio: u64,
+        dt: f64,
+        adopted: AdoptedStep,
+    ) -> bool {
         let own = implex::step_ratio(self.committed.implex.step, dt).to_bits();
         let carries = (self.lean_implex() && self.carried) || implex::carries_over(&self.committed);
         if self.model.solver.integration != Integration::Implex
@@ -731,7 +749,14 @@ impl Instance {
         // The unknowns are not the step's at any strain.
         trial.linear.unknowns_strain = [f64::NAN; 3];
         self.implex_step = Some(ratio);
+        self.adopted = Some(Box::new(adopted));
         true
+    }
+
+    /// Whether the pending trial was answered on a step adopted from another point and
+    /// kept ([`adopt_step`](Self::adopt_step)).
+    pub fn on_adopted_step(&self) -> bool {
+        self.adopted.is_some() && self.implex_step.is_some() && self.has_trial()
     }
 
     /// Whether the pending solved trial holds another contact status than the committed

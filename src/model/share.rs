@@ -88,6 +88,11 @@ pub fn same_model(a: &std::sync::Arc<Model>, b: &std::sync::Arc<Model>) -> bool 
     std::sync::Arc::ptr_eq(a, b) && a.fingerprint() == b.fingerprint()
 }
 
+/// Whether two slices hold the same values bit for bit.
+pub fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
 fn norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
@@ -145,6 +150,7 @@ pub fn cores_close(tol: f64, point: &Core, anchor: &Core) -> bool {
 /// extrapolated history `h_ex = h + r (h - h_{n-1})` of a committed core for step ratio
 /// `r`, under the core's contact status; the step's matrix is
 /// `K_ex = K_const + sum_q B_q^T S_q B_q w_q`. Entries as `f32`, point-major.
+#[derive(Debug)]
 pub struct StepSignature {
     secants: Vec<f32>,
     /// Mean entry: a first filter of the candidates.
@@ -225,6 +231,44 @@ pub fn step_difference(
         }
     }
     out.map(|v| v / disc.volume)
+}
+
+/// An IMPL-EX step a point took from an anchor ([`Instance::adopt_step`]), with what
+/// keeping it is judged by at every answer on it ([`AdoptedStep::keeps`]).
+///
+/// [`Instance::adopt_step`]: super::Instance::adopt_step
+#[derive(Debug)]
+pub struct AdoptedStep {
+    /// The adopter's own step signature (its committed state at the step's ratio).
+    pub own: std::sync::Arc<StepSignature>,
+    /// The anchor's.
+    pub anchor: std::sync::Arc<StepSignature>,
+    /// The strain the anchor answered at.
+    pub anchor_strain: [f64; 3],
+    /// The two committed states are the same to round-off ([`ROUND_OFF`]).
+    pub twin: bool,
+}
+
+impl AdoptedStep {
+    /// Whether an answer `response` at `strain` on the adopted `step` is kept
+    /// ([`keeps_step`]); `still`: the trial left the point's history and contact status
+    /// unchanged. The point's own history counts as kept for a twin, and for a point at
+    /// the anchor's strain to round-off (CalculiX's twin point layers).
+    pub fn keeps(
+        &self,
+        model: &Model,
+        step: &LinearBranch,
+        strain: &[f64; 3],
+        response: &Response,
+        still: bool,
+    ) -> bool {
+        let Some(tol) = tolerance(model) else {
+            return false;
+        };
+        let d = step_difference(model, step, &self.own, &self.anchor, strain);
+        let at_anchor = strains_close(ROUND_OFF, strain, &self.anchor_strain);
+        keeps_step(tol, response, &d, still || self.twin || at_anchor)
+    }
 }
 
 /// Whether a point keeps the IMPL-EX step it adopted and answered `response` on: its

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod hard_paths;
+pub mod share_paths;
 
 use std::path::{Path, PathBuf};
 

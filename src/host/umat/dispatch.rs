@@ -10,6 +10,7 @@ use super::table::{plain, Failed, Umat};
 use super::table_mode::table_refused;
 use crate::error::Error;
 use crate::host::mirrors::MIRRORS;
+use crate::solver::Integration;
 
 /// `NSTATV` up to this keeps the state in the library's table (room for the mirrors).
 pub const TABLE_MODE_MAX_NSTATV: usize = MIRRORS;
@@ -50,11 +51,13 @@ impl Umat {
         signal: HostSignal,
     ) -> Result<Outcome, Failed> {
         check_lengths(c, out).map_err(plain)?;
+        check_dtime(c, None).map_err(plain)?;
         let material = match slot_material(self.id, c) {
             Some(m) => m,
             None => self.material(c).map_err(Failed::unresolved)?,
         };
         let with_material = Failed::of(&material);
+        check_dtime(c, Some(material.model.solver.integration)).map_err(with_material)?;
         let statev_len = material.model.statev_len();
         if in_statev_mode(c, out.statev.len(), statev_len).map_err(with_material)? {
             return self.statev_call(c, out, material, signal);
@@ -81,6 +84,31 @@ fn check_lengths(c: &UmatCall, out: &UmatOutputs) -> crate::Result<()> {
                 "{name} has {got} entries, NTENS = {n} needs {want}"
             )));
         }
+    }
+    Ok(())
+}
+
+/// Refuses a `DTIME` that is not finite (before the material is known: `integration`
+/// `None`), and a negative one where the material's integration reads it (IMPL-EX scales
+/// its extrapolation by `DTIME`; implicit integration ignores it). A refused call leaves
+/// `STRESS` and `STATEV` as they came (a host without `PNEWDT` gets NaN stress).
+fn check_dtime(c: &UmatCall, integration: Option<Integration>) -> crate::Result<()> {
+    let refused = match integration {
+        None => !c.dtime.is_finite(),
+        Some(Integration::Implex) => c.dtime < 0.0,
+        Some(_) => false,
+    };
+    if refused {
+        let reads = if integration.is_some() {
+            " (the material's IMPL-EX integration scales its step by DTIME)"
+        } else {
+            ""
+        };
+        return Err(Error::HostConvention(format!(
+            "DTIME = {} is not a time increment{reads}: the host must pass a finite \
+             DTIME >= 0",
+            c.dtime
+        )));
     }
     Ok(())
 }

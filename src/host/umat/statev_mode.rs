@@ -305,20 +305,10 @@ impl Umat {
         check_start_strain(p, c, virgin, timed)?;
         p.statev.trial_hash = None;
         let request = p.material.tangent;
-        let mut step = may_share.then(|| self.shared_step(p, c)).flatten();
-        let update = |p: &mut Point| {
-            with_workspace(&model, |ws| {
-                p.instance.update_timed(strain, c.dtime, ws, request)
-            })
-        };
-        let mut r = update(p)?;
-        if let Some(lookup) = step.as_mut().filter(|l| l.adopted.is_some()) {
-            if !keeps_step(p, lookup, &strain, &r) {
-                p.instance.drop_adopted_step();
-                lookup.adopted = None;
-                r = update(p)?;
-            }
-        }
+        let step = may_share.then(|| self.shared_step(p, c)).flatten();
+        let r = with_workspace(&model, |ws| {
+            p.instance.update_timed(strain, c.dtime, ws, request)
+        })?;
         p.statev.trial_time = timed.then(|| c.time[1] + c.dtime);
         let trial_hash = with_written(statev.len(), |written| {
             p.write_trial(written).map(|()| values_hash(written))
@@ -326,7 +316,7 @@ impl Umat {
         p.statev.trial_hash = Some(trial_hash);
         let solved = r.report.answer != Answer::Repeated;
         if let Some(step) = step {
-            return Ok((r, self.step_shared(p, c, step, &r)));
+            return Ok((r, self.step_shared(p, c, step, (&strain, &r))));
         }
         if solved && timed && sharing(p).is_some() && !implex_model(p) {
             let mut trial = p.instance.trial_core()?;
@@ -362,19 +352,36 @@ impl Umat {
         }
         let model = p.material.model.clone();
         let core = p.instance.committed_core_view();
-        let signature = StepSignature::of(&model, &core, ratio);
+        let signature = Arc::new(StepSignature::of(&model, &core, ratio));
         let ratio = ratio.to_bits();
         let found =
             (self.share).follow_step(&model, increment_key(c), tol, (&core, ratio, &signature));
-        let adopted = found.filter(|s| p.instance.adopt_step(&s.step, ratio, c.dtime));
-        Some(StepLookup { signature, adopted })
+        if let Some(found) = found {
+            let twin = core.is(&found.committed)
+                || share::cores_close(share::ROUND_OFF, &core.to_core(), &found.committed);
+            let adopted = share::AdoptedStep {
+                own: signature.clone(),
+                anchor: found.signature.clone(),
+                anchor_strain: found.strain,
+                twin,
+            };
+            p.instance.adopt_step(&found.step, ratio, c.dtime, adopted);
+        }
+        Some(StepLookup { signature })
     }
 
     /// After an update of [`Umat::shared_step`]: counts the call, and records the step a
     /// call that factorized it solved; returns whether the call solved.
-    fn step_shared(&self, p: &Point, c: &UmatCall, lookup: StepLookup, r: &Response) -> bool {
-        if lookup.adopted.is_some() {
+    fn step_shared(
+        &self,
+        p: &Point,
+        c: &UmatCall,
+        lookup: StepLookup,
+        (strain, r): (&[f64; 3], &Response),
+    ) -> bool {
+        if p.instance.on_adopted_step() {
             self.shared.fetch_add(1, Ordering::Relaxed);
+            self.share.count_shared(&p.material.model, increment_key(c));
             return false;
         }
         let counter = match r.report.answer {
@@ -389,6 +396,7 @@ impl Umat {
             // The update left the committed state as the lookup saw it.
             let step = Step {
                 committed: p.instance.committed_core(),
+                strain: *strain,
                 step: step.clone(),
                 ratio,
                 signature: lookup.signature,
@@ -401,27 +409,9 @@ impl Umat {
 }
 
 /// What [`Umat::shared_step`] looked up: the signature of the point's step (recorded with
-/// the step and the committed core if the point factorizes it), and the step adopted.
+/// the step and the committed core if the point factorizes it).
 struct StepLookup {
-    signature: StepSignature,
-    adopted: Option<Arc<Step>>,
-}
-
-/// Whether a point answered `r` on the step it adopted keeps it: the error indicator of
-/// step sharing ([`share::keeps_step`]), with the point's committed core the step's to
-/// round-off counting as its own history.
-fn keeps_step(p: &Point, lookup: &StepLookup, strain: &[f64; 3], r: &Response) -> bool {
-    let (Some(found), Some(tol)) = (&lookup.adopted, sharing(p)) else {
-        return false;
-    };
-    let Some((step, _)) = p.instance.implex_step() else {
-        return false;
-    };
-    let model = &p.material.model;
-    let d = share::step_difference(model, step, &lookup.signature, &found.signature, strain);
-    let committed = p.instance.committed_core();
-    let twin = share::cores_close(share::ROUND_OFF, &committed, &found.committed);
-    share::keeps_step(tol, r, &d, p.instance.trial_is_still() || twin)
+    signature: Arc<StepSignature>,
 }
 
 /// The sharing tolerance of the point's material, when it shares: `[solver]
