@@ -203,10 +203,10 @@ impl ShareTable {
             // The first anchor that matches and whose indicator lets the point follow.
             let (anchor, follow) = inc.anchors.iter().find_map(|a| {
                 let matches = share::strains_close(tol, &strain, &a.strain)
-                    && share::cores_close(tol, core, &a.committed);
+                    && share::cores_close(tol, &core.view(), &a.committed);
                 let still = a.trial.closed == a.committed.closed
                     && share::same_bits(&a.trial.history, &a.committed.history);
-                let twin = share::cores_close(0.0, core, &a.committed);
+                let twin = share::cores_close(0.0, &core.view(), &a.committed);
                 let follow = share::follows(tol, &a.response, &a.strain, &strain, twin, still);
                 follow.filter(|_| matches).map(|f| (a, f))
             })?;

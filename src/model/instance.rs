@@ -69,8 +69,11 @@ pub struct Instance {
     /// With IMPL-EX integration: the step ratio (bits) whose step of the committed state
     /// `trial.linear` holds, if any (see [`Model::implex_update`]).
     implex_step: Option<u64>,
-    /// The step `trial.linear` holds was another point's ([`adopt_step`](Self::adopt_step)):
-    /// every answer on it is judged by sharing's indicator, and a commit does not carry it.
+    /// The step `trial.linear` holds (or, after a commit, the committed state's) was
+    /// another point's ([`adopt_step`](Self::adopt_step)): every answer on it is judged by
+    /// sharing's indicator. It carries over to the next increment only while this point's
+    /// history and status stay as they were (an unloading or closed point), its own
+    /// signature then unchanged; otherwise a commit drops it.
     adopted: Option<Box<AdoptedStep>>,
     /// Commits of a trial whose error estimate exceeded `solver.step_tolerance` (the host
     /// kept an increment it was asked to redo smaller), and the last one's estimate.
@@ -334,7 +337,7 @@ impl Instance {
             trial.linear.copy_from(&self.committed.linear);
             trial.unknowns.copy_from_slice(&self.committed.unknowns);
         }
-        if !reuse {
+        if !reuse && !carry {
             self.adopted = None;
         }
         let reuse = reuse || carry;
@@ -418,9 +421,10 @@ impl Instance {
                 std::mem::swap(&mut self.committed, trial);
                 self.implex_step = None;
                 self.carried = false;
-                if self.adopted.take().is_some() {
-                    // Another point's step: the next step is this point's own (or
-                    // another adopted one, judged again), never a carry of this one.
+                if self.adopted.is_some() && !implex::carries_over(&self.committed) {
+                    // Another point's step whose history it froze is not this point's
+                    // any more: the next step is this point's own, or adopted again.
+                    self.adopted = None;
                     self.committed.linear.invalidate();
                 }
             }
@@ -528,6 +532,7 @@ impl Instance {
             });
         }
         self.committed = state;
+        self.adopted = None;
         self.implex_step = None;
         self.carried = false;
         self.revert();
@@ -589,6 +594,7 @@ impl Instance {
             self.committed.unknowns = Vec::new();
         }
         self.implex_step = None;
+        self.adopted = None;
         self.revert();
         Ok(())
     }

@@ -137,12 +137,12 @@ pub fn steps_match(point: &State, anchor: &State) -> bool {
 }
 
 /// [`states_close`] for two `STATEV` cores (the UMAT's table, `crate::host`).
-pub fn cores_close(tol: f64, point: &Core, anchor: &Core) -> bool {
+pub fn cores_close(tol: f64, point: &CoreView<'_>, anchor: &Core) -> bool {
     point.closed == anchor.closed
         && point.at_start == anchor.at_start
         && point.step.to_bits() == anchor.step.to_bits()
-        && close(tol, &point.history, &anchor.history, H_FLOOR)
-        && close(tol, &point.previous, &anchor.previous, H_FLOOR)
+        && close(tol, point.history, &anchor.history, H_FLOOR)
+        && close(tol, point.previous, &anchor.previous, H_FLOOR)
 }
 
 /// What an IMPL-EX step freezes, for step sharing in `STATEV` mode (`crate::host`): the

@@ -358,7 +358,7 @@ impl Umat {
             (self.share).follow_step(&model, increment_key(c), tol, (&core, ratio, &signature));
         if let Some(found) = found {
             let twin = core.is(&found.committed)
-                || share::cores_close(share::ROUND_OFF, &core.to_core(), &found.committed);
+                || share::cores_close(share::ROUND_OFF, &core, &found.committed);
             let adopted = share::AdoptedStep {
                 own: signature.clone(),
                 anchor: found.signature.clone(),
