@@ -183,7 +183,7 @@ impl Instance {
         self.pending = Pending::Nothing;
         self.last = None;
         let mut response = if self.model.solver.integration == Integration::Implex {
-            self.implex(strain, dt, ws, request)?
+            self.implex(strain, dt, ws, request, false)?
         } else {
             self.implicit(strain, ws, request)?
         };
@@ -309,19 +309,22 @@ impl Instance {
 
     /// The IMPL-EX update: the step kept from an earlier update of this step (same
     /// committed state, same step ratio; only with `solver.fast_path`), or a new step.
+    /// `own_step`: factorize this point's own step (an adopted one was refused).
     fn implex(
         &mut self,
         strain: [f64; 3],
         dt: f64,
         ws: &mut Workspace,
         request: TangentRequest,
+        own_step: bool,
     ) -> Result<Response> {
         self.unpark_unformed();
         let model = &self.model;
         let ratio = implex::step_ratio(self.committed.implex.step, dt).to_bits();
-        let reuse = model.solver.fast_path && self.implex_step == Some(ratio);
+        let reuse = !own_step && model.solver.fast_path && self.implex_step == Some(ratio);
         let lean = self.lean_implex();
         let carry = !reuse
+            && !own_step
             && model.solver.fast_path
             && ((lean && self.carried) || implex::carries_over(&self.committed));
         let trial = (self.trial).get_or_insert_with(|| Box::new(new_state(model, lean)));
@@ -348,11 +351,13 @@ impl Instance {
             let still = super::share::same_bits(&trial.history, &self.committed.history)
                 && trial.implex.closed == self.committed.implex.closed;
             if !adopted.keeps(model, &trial.linear, &strain, &response, still) {
-                // The anchor's step is refused here: this point factorizes its own.
+                // The anchor's step is refused here: this point factorizes its own (a
+                // lean instance's carried step was the refused one).
                 self.adopted = None;
                 self.implex_step = None;
+                self.carried = false;
                 trial.linear.invalidate();
-                return self.implex(strain, dt, ws, request);
+                return self.implex(strain, dt, ws, request, true);
             }
         }
         self.judge(dt, &mut response.report);
@@ -1001,7 +1006,10 @@ mod tests {
     /// itself, without a factorization; a step of another ratio is refused.
     #[test]
     fn an_adopted_implex_step_answers_as_the_own_one() {
-        let text = DEFAULT_SCENE_TOML.replace("[solver]\n", "[solver]\nintegration = \"implex\"\n");
+        let text = DEFAULT_SCENE_TOML.replace(
+            "[solver]\n",
+            "[solver]\nintegration = \"implex\"\nshare_tolerance = 0.005\n",
+        );
         let model = cache::model_for_text(&text, None).unwrap();
         let mut ws = model.workspace();
         let consistent = TangentRequest::Consistent;
@@ -1013,8 +1021,20 @@ mod tests {
                 .update_timed(strain(0.9), 1.0, &mut ws, consistent)
                 .unwrap();
             let (step, ratio) = anchor.implex_step().unwrap();
-            assert!(!follower.adopt_step(step, ratio ^ 1, 1.0));
-            assert!(follower.adopt_step(step, ratio, 1.0));
+            let adopted = twin_of(
+                &model,
+                follower.committed(),
+                anchor.committed(),
+                strain(0.9),
+            );
+            assert!(!follower.adopt_step(step, ratio ^ 1, 1.0, adopted));
+            let adopted = twin_of(
+                &model,
+                follower.committed(),
+                anchor.committed(),
+                strain(0.9),
+            );
+            assert!(follower.adopt_step(step, ratio, 1.0, adopted));
             let r = follower
                 .update_timed(strain(1.0), 1.0, &mut ws, consistent)
                 .unwrap();
@@ -1022,6 +1042,7 @@ mod tests {
                 .update_timed(strain(1.0), 1.0, &mut ws, consistent)
                 .unwrap();
             assert_eq!(r.report.factorizations, 0, "increment {k}");
+            assert!(follower.on_adopted_step());
             assert_eq!(e.report.factorizations, 1, "increment {k}");
             assert_eq!(r.stress.map(f64::to_bits), e.stress.map(f64::to_bits));
             assert_eq!(r.tangent.map(f64::to_bits), e.tangent.map(f64::to_bits));
@@ -1032,5 +1053,97 @@ mod tests {
             }
         }
         assert!(own.committed().history.iter().any(|&h| h > 0.0));
+    }
+
+    /// The twin-by-core `AdoptedStep` of `point` taking `anchor`'s step.
+    fn twin_of(
+        model: &Model,
+        point: &State,
+        anchor: &State,
+        anchor_strain: [f64; 3],
+    ) -> AdoptedStep {
+        use super::super::share::{self, StepSignature};
+        let sig = |s: &State| {
+            let view = model.core_view_of(s);
+            Arc::new(StepSignature::of(
+                model,
+                &view,
+                implex::step_ratio(s.implex.step, 1.0),
+            ))
+        };
+        AdoptedStep {
+            own: sig(point),
+            anchor: sig(anchor),
+            anchor_strain,
+            twin: share::states_close(share::ROUND_OFF, point, anchor),
+        }
+    }
+
+    /// A point of another state that takes a step it damages on is refused it: its answer
+    /// is its own step's, bit for bit, in the same update; a point that stays still on it
+    /// keeps it, within the tolerance of its own answer.
+    #[test]
+    fn an_adopted_step_is_refused_where_the_point_damages_and_kept_where_it_is_still() {
+        let text = DEFAULT_SCENE_TOML.replace(
+            "[solver]\n",
+            "[solver]\nintegration = \"implex\"\nshare_tolerance = 0.05\n",
+        );
+        let model = cache::model_for_text(&text, None).unwrap();
+        let mut ws = model.workspace();
+        let consistent = TangentRequest::Consistent;
+        let mut anchor = Instance::new(model.clone());
+        let (mut follower, mut own) = (Instance::new(model.clone()), Instance::new(model.clone()));
+        // Loading: the follower at 1.02 of the anchor's strain damages on its step.
+        let strain = |x: f64, a: f64| [x * a, -0.2 * x * a, 0.0];
+        let (mut kept, mut refused) = (0, 0);
+        for (k, a) in [1e-5, 4e-5, 8e-5, 1.2e-4, 1.6e-4, 1e-4, 5e-5, 2e-5]
+            .iter()
+            .enumerate()
+        {
+            anchor
+                .update_timed(strain(1.0, *a), 1.0, &mut ws, consistent)
+                .unwrap();
+            if let Some((step, ratio)) = anchor.implex_step() {
+                let adopted = AdoptedStep {
+                    twin: false,
+                    ..twin_of(
+                        &model,
+                        follower.committed(),
+                        anchor.committed(),
+                        strain(1.0, *a),
+                    )
+                };
+                follower.adopt_step(step, ratio, 1.0, adopted);
+            }
+            let adopted_before = follower.adopted.is_some();
+            let r = follower
+                .update_timed(strain(1.02, *a), 1.0, &mut ws, consistent)
+                .unwrap();
+            let e = own
+                .update_timed(strain(1.02, *a), 1.0, &mut ws, consistent)
+                .unwrap();
+            if follower.on_adopted_step() {
+                kept += 1;
+                assert!(
+                    follower.trial_is_still(),
+                    "increment {k}: a damaging step was kept"
+                );
+                let d = (0..3).fold(0.0f64, |m, i| m.max((r.stress[i] - e.stress[i]).abs()));
+                let s = e.stress.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(d <= 0.05 * s, "increment {k}: {d} against {s}");
+            } else {
+                refused += usize::from(adopted_before);
+                assert_eq!(
+                    r.stress.map(f64::to_bits),
+                    e.stress.map(f64::to_bits),
+                    "increment {k}"
+                );
+                assert_eq!(follower.trial_core().unwrap(), own.trial_core().unwrap());
+            }
+            for inst in [&mut anchor, &mut follower, &mut own] {
+                inst.commit().unwrap();
+            }
+        }
+        assert!(kept > 0 && refused > 0, "kept {kept}, refused {refused}");
     }
 }
