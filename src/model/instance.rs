@@ -348,9 +348,7 @@ impl Instance {
         let mut response = model.implex_update(&self.committed, strain, dt, ws, trial, reuse)?;
         self.implex_step = Some(ratio);
         if let Some(adopted) = self.adopted.as_deref() {
-            let still = super::share::same_bits(&trial.history, &self.committed.history)
-                && trial.implex.closed == self.committed.implex.closed;
-            if !adopted.keeps(model, &trial.linear, &strain, &response, still) {
+            if !adopted.keeps(model, &self.committed, &trial.linear, &strain, &response) {
                 // The anchor's step is refused here: this point factorizes its own (a
                 // lean instance's carried step was the refused one).
                 self.adopted = None;

@@ -403,7 +403,7 @@ impl Model {
     }
 
     /// The problem the solver sees.
-    pub(super) fn problem(&self) -> Problem<'_> {
+    pub(crate) fn problem(&self) -> Problem<'_> {
         Problem {
             disc: &self.disc,
             linear: &self.linear,

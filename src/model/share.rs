@@ -250,24 +250,34 @@ pub struct AdoptedStep {
 }
 
 impl AdoptedStep {
-    /// Whether an answer `response` at `strain` on the adopted `step` is kept
-    /// ([`keeps_step`]); `still`: the trial left the point's history and contact status
-    /// unchanged. The point's own history counts as kept for a twin, and for a point at
-    /// the anchor's strain to round-off (CalculiX's twin point layers).
+    /// Whether an answer `response` at `strain` on the adopted `step` from `committed` is
+    /// kept ([`keeps_step`]). The point's own history counts as kept when the step leaves
+    /// it unchanged with a margin, at `(1 + tol) eps` (the jumps on another point's
+    /// stiffness are not the point's own: one just under a point's threshold may be just
+    /// over it on its own step, and a point past its peak goes on softening on its own
+    /// extrapolated step where the anchor's leaves it), and for a twin or a point at the
+    /// anchor's strain to round-off (CalculiX's twin point layers), whatever it damages.
     pub fn keeps(
         &self,
         model: &Model,
+        committed: &State,
         step: &LinearBranch,
         strain: &[f64; 3],
         response: &Response,
-        still: bool,
     ) -> bool {
         let Some(tol) = tolerance(model) else {
             return false;
         };
         let d = step_difference(model, step, &self.own, &self.anchor, strain);
-        let at_anchor = strains_close(ROUND_OFF, strain, &self.anchor_strain);
-        keeps_step(tol, response, &d, still || self.twin || at_anchor)
+        let own_history = self.twin
+            || strains_close(ROUND_OFF, strain, &self.anchor_strain)
+            || crate::solver::implex::stays_still(
+                &model.problem(),
+                committed,
+                step,
+                &strain.map(|e| e * (1.0 + tol)),
+            );
+        keeps_step(tol, response, &d, own_history)
     }
 }
 

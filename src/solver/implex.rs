@@ -209,6 +209,41 @@ pub fn finish_step(
     report
 }
 
+/// Whether a trial at `strain` on the step kept in `linear` would leave `committed` as it
+/// is: at every interface point the contact status the committed one and the history
+/// unchanged, bit for bit ([`finish_step`]'s test, without writing a trial).
+pub fn stays_still(
+    problem: &Problem,
+    committed: &State,
+    linear: &LinearBranch,
+    strain: &Strain,
+) -> bool {
+    let Some(law) = problem.disc.law.as_deref() else {
+        return true;
+    };
+    let (hl, np) = (law.history_len(), problem.disc.points_per_interface());
+    let mut stack = [0.0; 8];
+    let mut heap = Vec::new();
+    let trial: &mut [f64] = if hl <= stack.len() {
+        &mut stack[..hl]
+    } else {
+        heap.resize(hl, 0.0);
+        &mut heap
+    };
+    (0..problem.disc.interface_points()).all(|q| {
+        let jump = point_jump(linear, q, strain);
+        let closed = law.is_closed(jump);
+        let range = q * hl..(q + 1) * hl;
+        let length = problem.disc.interfaces[q / np].length;
+        law.trial_history_as(&committed.history[range.clone()], trial, jump, length, closed);
+        closed == committed.implex.is_closed(q)
+            && trial
+                .iter()
+                .zip(&committed.history[range])
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+    })
+}
+
 /// The local jump `[delta_s, delta_n] = A_q eps` of interface point `q` on the step kept
 /// in `linear`.
 fn point_jump(linear: &LinearBranch, q: usize, strain: &Strain) -> [f64; 2] {
