@@ -18,8 +18,8 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use rve::solver::Answer;
-use rve::state::{persist, StateSizes};
+use mesorve_core::solver::Answer;
+use mesorve_core::state::{persist, StateSizes};
 use rve::{Instance, Model, Scene, TangentRequest};
 
 fn median(v: &mut [f64]) -> f64 {

@@ -26,8 +26,8 @@ use std::process::Command;
 use std::sync::Arc;
 use std::time::Instant;
 
+use mesorve_core::solver::Answer;
 use rve::ffi::*;
-use rve::solver::Answer;
 use rve::{Instance, Model, Scene, State, TangentRequest};
 
 const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/paper_rve.toml");
@@ -346,7 +346,7 @@ fn batch_throughput(m: usize, rounds: usize) {
 /// One instance's bytes by component of its committed state (capacities, as
 /// `State::bytes` counts them); `owned` is `Instance::state_bytes` (committed + trial).
 fn breakdown(label: &str, s: &State, owned: usize) {
-    let q = |v: &rve::state::Quantized| (v.values.capacity(), 4 * v.scales.capacity());
+    let q = |v: &mesorve_core::state::Quantized| (v.values.capacity(), 4 * v.scales.capacity());
     let (sens, sens_scales) = q(&s.sensitivity.data);
     let (curv, curv_scales) = q(&s.curvature.data);
     let rows = [

@@ -23,7 +23,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use faer::dyn_stack::MemStack;
-use rve::solver::FactorKind;
+use mesorve_core::solver::FactorKind;
 use rve::{Instance, Model, Scene, TangentRequest};
 
 /// Right-hand-side counts the solver's solves use, timed one by one.
@@ -110,7 +110,7 @@ fn bench(path: &str) -> Row {
                         &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
-                        rve::solver::FactorMethod::SymmetricFirst,
+                        mesorve_core::solver::FactorMethod::SymmetricFirst,
                         MemStack::new(&mut stack),
                     )
                     .expect("factorization");
@@ -142,7 +142,7 @@ fn bench(path: &str) -> Row {
                         &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
-                        rve::solver::FactorMethod::Lu,
+                        mesorve_core::solver::FactorMethod::Lu,
                         MemStack::new(&mut stack),
                     )
                     .expect("lu");

@@ -18,10 +18,10 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
+use mesorve_core::state::statev;
 use rve::host::{strain_mismatch, Hypothesis, SearchPath, Umat, UmatCall, UmatOutputs};
 use rve::model::cache;
 use rve::scene::path_points;
-use rve::state::statev;
 
 const ROUNDS: usize = 5;
 /// Repetitions of a check per timing (each is well below a microsecond).

@@ -18,7 +18,7 @@ UMAX = 0.12 mm): increment k of the whole path (1, 2, ..., down + back + up) end
 own prescribed displacement, at time k. ccx's automatic incrementation, never above those
 steps. Every increment has the same time increment (DTIME = 1, each step's time period is
 its number of increments): IMPL-EX extrapolates the RVE's history by the ratio of the
-increment's DTIME to the last one's (src/solver/implex.rs), so a step whose increments
+increment's DTIME to the last one's (crates/core/src/solver/implex.rs), so a step whose increments
 had another DTIME would extrapolate further or less at its first increment.
 
 Stages: the increments K (default: down / 3, down, and the last) at which ccx prints every

@@ -29,7 +29,7 @@
 mod fixed_status;
 
 use fixed_status::solve_fixed;
-use rve::interface::{CohesiveHistory, CohesiveLaw, Penalty};
+use mesorve_core::interface::{CohesiveHistory, CohesiveLaw, Penalty};
 use rve::{Model, Scene, TangentRequest};
 
 /// Jumps `[delta_s, delta_n]` of every interface point at `x`.
@@ -47,7 +47,7 @@ fn jumps(model: &Model, x: &[f64]) -> Vec<[f64; 2]> {
                 0.0
             }
         });
-        out.extend_from_slice(&rve::element::interface4::local_jumps(g, q, &u)[..np]);
+        out.extend_from_slice(&mesorve_core::element::interface4::local_jumps(g, q, &u)[..np]);
     }
     out
 }

@@ -21,9 +21,8 @@
 //! The modules [`ffi`] (the C interface, a thin translation over this API), [`host`] (the
 //! UMAT's translation of host tensor layouts and `STATEV`), [`io`] (VTK and SVG output),
 //! [`scene`] (the schema) and [`model`] are public too. The numerical core (mesh,
-//! elements, interface laws, constraints, assembly, solver, homogenization, state) is
-//! crate-private; the `internals` feature opens it to the verification tests and
-//! benches, without any compatibility promise.
+//! elements, interface laws, constraints, assembly, solver, homogenization, state) is the
+//! crate `mesorve-core`; this crate re-exports the part of it users program against.
 //!
 //! ```
 //! use std::sync::Arc;
@@ -49,52 +48,23 @@
 //!
 //! # Structure
 //!
-//! The C interface in [`ffi`] is a thin translation over this API. The command-line tool
-//! (`src/cli/`) is a module of the `rve` binary, not of this library, so `librve.so`
-//! does not link clap.
-//!
-//! Dependencies flow one way (`tests/layers.rs` fails on an import against this order):
+//! The workspace's crates are its layers (docs/architecture.md): `mesorve-core` (the
+//! numerics) below this crate (scene, model, host, ffi: `librve.so`), and the `rve` tool
+//! (`crates/cli`) above it, the only crate that links clap. Inside this crate dependencies
+//! flow one way (`tests/layers.rs` fails on an import against this order):
 //!
 //! ```text
-//! ffi -> host -> model -> scene -> {io, solver, homogenization} -> assembly
-//!     -> constraint -> {mesh, element, state} -> {geometry, material, interface} -> error
+//! ffi -> host -> model -> scene -> io
 //! ```
 //!
-//! `model` is the edge where the scene schema becomes the numerical modules' own types
-//! (`model::from_scene`); no numerical module reads `scene`.
+//! `model` is the edge where the scene schema becomes the core's own types
+//! (`model::from_scene`); the core never reads a scene.
 //!
 //! `unsafe` code is denied everywhere but in [`ffi`], the C boundary.
 
 #![deny(unsafe_code)]
 
-/// Declares a module of the numerical core: crate-private in the library users link,
-/// public (and hidden from the docs) with the `internals` feature, which only the
-/// verification tests and benches turn on (the crate's dev-dependency on itself in
-/// `Cargo.toml`). Its items carry no compatibility promise.
-macro_rules! internal_modules {
-    ($($name:ident),* $(,)?) => {$(
-        #[cfg(feature = "internals")]
-        #[doc(hidden)]
-        pub mod $name;
-        #[cfg(not(feature = "internals"))]
-        pub(crate) mod $name;
-    )*};
-}
-
-internal_modules!(
-    assembly,
-    constraint,
-    element,
-    geometry,
-    homogenization,
-    interface,
-    material,
-    mesh,
-    solver,
-    state,
-);
-
-pub mod error;
+pub use mesorve_core::error;
 #[allow(unsafe_code)]
 pub mod ffi;
 pub mod host;
@@ -103,12 +73,14 @@ pub mod model;
 pub mod scene;
 
 pub use error::{Error, Result};
-pub use material::Analysis;
-pub use mesh::MeshStats;
+pub use mesorve_core::material::Analysis;
+pub use mesorve_core::mesh::MeshStats;
+pub use mesorve_core::solver::{
+    Answer, FactorKind, IncrementReport, Integration, TangentRequest, Workspace,
+};
+pub use mesorve_core::state::{persist, Quantized, State, StateSizes, STATE_FORMAT_VERSION};
 pub use model::{Instance, Model, Response};
 pub use scene::{Scene, MAX_STRAIN};
-pub use solver::{Answer, FactorKind, IncrementReport, Integration, TangentRequest, Workspace};
-pub use state::{persist, Quantized, State, StateSizes, STATE_FORMAT_VERSION};
 
 /// The crate version, `major.minor.patch`, as in Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::Command;
 use std::sync::{Arc, Once};
 
-use rve::solver::TangentRequest;
+use mesorve_core::solver::TangentRequest;
 use rve::{Instance, Model, Scene};
 
 /// Builds the shared library from these sources and the C examples against it, once per
@@ -55,7 +55,7 @@ fn compare(scene: Option<&Path>, tag: &str) -> usize {
     let driver = common::repo("target/c_examples/bin/rve_driver");
     let dir = std::env::temp_dir().join(format!("mesorve-c-driver-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let mut run = Command::new(env!("CARGO_BIN_EXE_rve"));
+    let mut run = Command::new(common::rve_exe());
     run.args(["run", "--quiet", "--out"]).arg(&dir);
     if let Some(scene) = scene {
         run.arg(scene);

@@ -1,5 +1,5 @@
 //! Checkpoint/restart through the safe API only: `Instance::save_state`, `load_state` and
-//! the typed errors of `rve::state::persist`, without the C interface.
+//! the typed errors of `mesorve_core::state::persist`, without the C interface.
 
 mod common;
 
@@ -161,7 +161,7 @@ fn a_format_1_checkpoint_loads_through_the_safe_api() {
     let again = inst.save_state().unwrap();
     assert_eq!(
         u32::from_le_bytes(again[8..12].try_into().unwrap()),
-        rve::state::STATE_FORMAT_VERSION
+        mesorve_core::state::STATE_FORMAT_VERSION
     );
     let mut copy = Instance::new(model);
     copy.load_state(&again).unwrap();

@@ -39,7 +39,7 @@
 //! round-off, whatever the mesh. The homogenized stress is `sigma = D eps_b`.
 //!
 //! The history is committed at every increment, so the reference follows the same
-//! sequence of states as the RVE. The law (`rve::interface::CohesiveLaw::evaluate`) is
+//! sequence of states as the RVE. The law (`mesorve_core::interface::CohesiveLaw::evaluate`) is
 //! smooth on each of its branches but not across them: where `delta_n` turns negative
 //! the shear traction jumps from the cohesive `k beta^2 delta_s` to the penalty
 //! `lambda_p l_e delta_s` (sliding is measured from the reference configuration). So
@@ -115,10 +115,10 @@ mod common;
 
 use std::sync::Arc;
 
+use mesorve_core::constraint::FIXED;
+use mesorve_core::interface::{Branch, CohesiveHistory, CohesiveLaw, ContactShear, Penalty};
+use mesorve_core::material::{Analysis, IsotropicElastic};
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
-use rve::constraint::FIXED;
-use rve::interface::{Branch, CohesiveHistory, CohesiveLaw, ContactShear, Penalty};
-use rve::material::{Analysis, IsotropicElastic};
 use rve::{Instance, Model, Scene, TangentRequest};
 
 // Table 1 (section 5.1).
@@ -278,7 +278,11 @@ impl Reference {
         &self,
         eps: [f64; 3],
         jump: [f64; 2],
-    ) -> (Vector2<f64>, Matrix2<f64>, rve::interface::CohesivePoint) {
+    ) -> (
+        Vector2<f64>,
+        Matrix2<f64>,
+        mesorve_core::interface::CohesivePoint,
+    ) {
         let sigma = self.d * self.bulk_strain(eps, jump);
         let p = self.law.evaluate(&self.history, jump, self.length);
         let f = Vector2::new(sigma[2] - p.traction[0], sigma[0] - p.traction[1]);
@@ -716,7 +720,7 @@ fn straight_interface_mesh_pairs_copies_by_side() {
     }
     for t in &mesh.triangles {
         let left = t.nodes.iter().map(|&n| mesh.nodes[n][0]).sum::<f64>() / 3.0 < setup.x_cut;
-        assert_eq!(left, t.phase == rve::mesh::Phase::Inclusion);
+        assert_eq!(left, t.phase == mesorve_core::mesh::Phase::Inclusion);
         for n in [bottom[0], top[0]] {
             if t.nodes.contains(&n) {
                 assert!(left);
@@ -755,7 +759,7 @@ fn minimal_bc_rows_integrate_a_field_with_a_jump_exactly() {
     let mut on_left = vec![None; mesh.nodes.len()];
     for t in &mesh.triangles {
         for &n in &t.nodes {
-            on_left[n] = Some(t.phase == rve::mesh::Phase::Inclusion);
+            on_left[n] = Some(t.phase == mesorve_core::mesh::Phase::Inclusion);
         }
     }
     let dofs = &model.discretization().dofs;
@@ -980,7 +984,7 @@ fn snap_back_lands_on_the_post_snap_branch() {
 /// minimum at the limit point itself (for the uniform mode
 /// `||R|| / ||G eps|| = |eps - eps_xx(delta)| / eps`, smallest at `delta_1`), so a
 /// Newton with a line search on `||R||` alone stalls there: before path following was
-/// added to src/solver (arc length across the snap, `src/solver/arclength.rs`) only 20
+/// added to src/solver (arc length across the snap, `crates/core/src/solver/arclength.rs`) only 20
 /// of these 40 paths got past it. Now every one must, and land on the closed-form
 /// post-snap branch (checked in `snap_back_run`).
 #[test]

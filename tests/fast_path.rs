@@ -1,4 +1,4 @@
-//! The fast path (`rve::solver::fast_path`): an update that keeps every ITZ point
+//! The fast path (`mesorve_core::solver::fast_path`): an update that keeps every ITZ point
 //! on the linear branch of its last full solve is answered as `D_b eps` without Newton.
 //!
 //! Every increment of every path here is computed twice from the same committed state:
@@ -14,11 +14,11 @@ mod common;
 
 use std::sync::Arc;
 
+use mesorve_core::interface::ContactShear;
+use mesorve_core::solver::Answer;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rve::interface::ContactShear;
 use rve::scene::Scene;
-use rve::solver::Answer;
 use rve::{Instance, Model, Response, TangentRequest};
 
 /// The relative agreement of the fast path with the full solve.
@@ -49,7 +49,7 @@ fn trial_state(inst: &Instance, eps: [f64; 3]) -> rve::State {
 /// `||R(x; eps)|| / reference` with every contact status read from its gap (the law as the
 /// paper states it) and the history `history`.
 fn residual_with_gaps(model: &Model, x: &[f64], eps: &[f64; 3], history: &[f64]) -> f64 {
-    let problem = rve::solver::Problem {
+    let problem = mesorve_core::solver::Problem {
         disc: model.discretization(),
         linear: model.linear_solver(),
         settings: model.settings(),

@@ -272,7 +272,7 @@ fn solver_failure_keeps_the_committed_state_and_suggests_a_smaller_step() {
 /// Bytes of a filled format 4 sensitivity for `n` unknowns (bincode: the valid flag, the
 /// block scales (f32) and the 3n i8 values, each vector after its u64 length).
 fn sensitivity_bytes(n: usize) -> usize {
-    1 + 8 + 4 * (3 * n).div_ceil(rve::state::SENSITIVITY_BLOCK) + 8 + 3 * n
+    1 + 8 + 4 * (3 * n).div_ceil(mesorve_core::state::SENSITIVITY_BLOCK) + 8 + 3 * n
 }
 
 /// Bytes of format 5's path curvature for `n` unknowns: the valid flag, the step (3 f64),
@@ -280,7 +280,7 @@ fn sensitivity_bytes(n: usize) -> usize {
 /// until an increment filled them).
 fn curvature_bytes(n: usize, filled: bool) -> usize {
     let (scales, values) = if filled {
-        (n.div_ceil(rve::state::SENSITIVITY_BLOCK), n)
+        (n.div_ceil(mesorve_core::state::SENSITIVITY_BLOCK), n)
     } else {
         (0, 0)
     };

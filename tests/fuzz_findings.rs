@@ -6,7 +6,7 @@ mod common;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use rve::mesh::gmsh::{parse_msh, read_msh, MAX_DECLARED_ITEMS, MAX_FILE_BYTES};
+use mesorve_core::mesh::gmsh::{parse_msh, read_msh, MAX_DECLARED_ITEMS, MAX_FILE_BYTES};
 use rve::scene::{MAX_PATH_INCREMENTS, MAX_TRIANGLES};
 use rve::{Error, Model, Scene, TangentRequest};
 

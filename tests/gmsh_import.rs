@@ -5,8 +5,8 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use rve::mesh::gmsh::{parse_msh, read_msh, write_msh22, write_msh41};
-use rve::mesh::{Phase, PhaseMesh};
+use mesorve_core::mesh::gmsh::{parse_msh, read_msh, write_msh22, write_msh41};
+use mesorve_core::mesh::{Phase, PhaseMesh};
 use rve::Error;
 
 /// The inclusions of the fixture (centre x, centre y, radius), as in

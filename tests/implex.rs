@@ -8,8 +8,8 @@ mod common;
 
 use std::sync::Arc;
 
+use mesorve_core::solver::TangentRequest;
 use rve::scene::{path_points, Scene};
-use rve::solver::TangentRequest;
 use rve::{Instance, Model, Response};
 
 /// The section 5.2.2 cycle scene with IMPL-EX and `per_segment` increments in its two

@@ -2,10 +2,12 @@
 //! hot-path kernels, and a small end-to-end consistency check between the triangle and
 //! interface element sign conventions.
 
+use mesorve_core::element::{
+    interface4, triangle, InterfaceGeometry, InterfaceQuadrature, MAX_POINTS,
+};
+use mesorve_core::interface::{CohesiveHistory, CohesiveLaw, ContactShear, Penalty};
+use mesorve_core::material::{Analysis, IsotropicElastic};
 use nalgebra::{SVector, Vector3};
-use rve::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature, MAX_POINTS};
-use rve::interface::{CohesiveHistory, CohesiveLaw, ContactShear, Penalty};
-use rve::material::{Analysis, IsotropicElastic};
 
 #[path = "common/counting_alloc.rs"]
 mod counting_alloc;

@@ -16,8 +16,8 @@
 
 use std::sync::Arc;
 
+use mesorve_core::material::{Analysis, IsotropicElastic};
 use nalgebra::{Matrix3, Vector3};
-use rve::material::{Analysis, IsotropicElastic};
 use rve::{Instance, Model, Scene, TangentRequest};
 
 const WIDTH: f64 = 2.0;

@@ -5,7 +5,7 @@ mod common;
 
 use std::collections::HashSet;
 
-use rve::mesh::{Mesh, MeshStats, Phase};
+use mesorve_core::mesh::{Mesh, MeshStats, Phase};
 use rve::model::build_microstructure;
 use rve::scene::Scene;
 
@@ -277,8 +277,8 @@ fn gmsh_scene_gets_itz_elements_between_the_mapped_phases() {
 
 #[test]
 fn our_mesh_survives_a_gmsh_22_and_41_round_trip() {
-    use rve::mesh::gmsh::{parse_msh, write_msh22, write_msh41};
-    use rve::mesh::{insert_itz, triangulate};
+    use mesorve_core::mesh::gmsh::{parse_msh, write_msh22, write_msh41};
+    use mesorve_core::mesh::{insert_itz, triangulate};
     let scene = common::scene("scenes/paper_rve.toml");
     let micro = build_microstructure(&scene).unwrap();
     let polygons: Vec<Vec<[f64; 2]>> = micro.inclusions.iter().map(|i| i.polygon(0.48)).collect();

@@ -2,7 +2,7 @@
 
 mod common;
 
-use rve::geometry::{place_random, Inclusion};
+use mesorve_core::geometry::{place_random, Inclusion};
 use rve::scene::{GeometrySpec, RandomSpec, Scene};
 
 fn random_spec(text: &str) -> RandomSpec {

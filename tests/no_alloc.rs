@@ -2,9 +2,9 @@
 //! factorization buffers have grown on a first update, and the quantized buffers of the
 //! instance's two states on the first three: a virgin state has none, the sensitivity is
 //! first filled by the first increment and the path curvature by the second, see
-//! `rve::state::Sensitivity` and `rve::state::PathCurvature`), `Instance::update` and
+//! `mesorve_core::state::Sensitivity` and `mesorve_core::state::PathCurvature`), `Instance::update` and
 //! `commit` make no heap allocation, on loading, unloading and contact increments alike, and
-//! neither does the fast path (`rve::solver::fast_path`). The hot
+//! neither does the fast path (`mesorve_core::solver::fast_path`). The hot
 //! path is every increment that converges in one step with LDL^T or checked LBL^T
 //! factorizations; faer's supernodal LU (the last resort for indefinite tangents)
 //! allocates inside faer, and so do the fallbacks (path following, error messages), which
@@ -86,7 +86,7 @@ fn update_and_commit_do_not_allocate() {
 /// unpivoted LDL^T meets a zero pivot).
 #[test]
 fn checked_indefinite_factorizations_do_not_allocate() {
-    use rve::solver::FactorKind;
+    use mesorve_core::solver::FactorKind;
 
     let scene = common::scene("scenes/paper_rve.toml");
     let model = Arc::new(Model::from_scene(&scene).unwrap());
@@ -119,7 +119,7 @@ fn checked_indefinite_factorizations_do_not_allocate() {
                     model.linear_solver(),
                     &pattern.symbolic,
                     &values,
-                    rve::solver::FactorUse::OneUse,
+                    mesorve_core::solver::FactorUse::OneUse,
                 )
                 .unwrap();
             factorization.solve(model.linear_solver(), rhs, 1);

@@ -12,10 +12,10 @@ mod common;
 
 use std::sync::Arc;
 
+use mesorve_core::material::{Analysis, IsotropicElastic};
+use mesorve_core::mesh::Phase;
+use mesorve_core::solver::IncrementReport;
 use nalgebra::{Matrix3, SymmetricEigen};
-use rve::material::{Analysis, IsotropicElastic};
-use rve::mesh::Phase;
-use rve::solver::IncrementReport;
 use rve::{Error, Instance, Model, Response, Scene, State, TangentRequest};
 
 const BCS: [&str; 4] = ["taylor", "linear", "periodic", "minimal"];
@@ -122,7 +122,7 @@ fn same_bits(a: &Response, b: &Response) -> bool {
             .collect()
     };
     // How the update was answered (solved, fast path, repeated trial) aside.
-    let counters = |r: &Response| rve::solver::IncrementReport {
+    let counters = |r: &Response| mesorve_core::solver::IncrementReport {
         answer: Default::default(),
         ..r.report
     };
@@ -864,7 +864,7 @@ fn updates_are_trials() {
             .update(eps, &mut ws, TangentRequest::Consistent)
             .unwrap();
         assert!(same_bits(&first, &again), "{first:?}\n{again:?}");
-        assert_eq!(again.report.answer, rve::solver::Answer::Repeated);
+        assert_eq!(again.report.answer, mesorve_core::solver::Answer::Repeated);
         inst.update(
             [-0.5e-4, 0.8e-4, 0.1e-4],
             &mut ws,
@@ -1107,8 +1107,8 @@ fn minimal_bc_multipliers_are_the_homogenized_stress() {
 /// (where `s_zz != 0`) on a damaged mixed-contact state.
 #[test]
 fn stress_is_the_area_average_of_element_stresses() {
-    use rve::constraint::FIXED;
-    use rve::element::triangle;
+    use mesorve_core::constraint::FIXED;
+    use mesorve_core::element::triangle;
     for bc in BCS {
         let model = two_circles(bc, "plane_strain", &[]);
         let (inst, eps, base) = set_up(&model, InterfaceState::Mixed, bc);
@@ -1282,7 +1282,7 @@ fn cohesive_contact_shear_reaches_equilibrium_with_sliding() {
 /// committed first step.
 #[test]
 fn perfect_bonding_is_answered_without_a_factorization() {
-    use rve::solver::{solve_increment, Problem};
+    use mesorve_core::solver::{solve_increment, Problem};
     for analysis in ANALYSES {
         for bc in BCS {
             let model = paper_rve(

@@ -1,4 +1,4 @@
-//! The UMAT with the RVE state in `STATEV` (`rve::host::Umat`, `rve::state::statev`): a
+//! The UMAT with the RVE state in `STATEV` (`rve::host::Umat`, `mesorve_core::state::statev`): a
 //! host that hands the start-of-increment values at every call and keeps the last ones
 //! written when an increment converges, over the paper's §5.2.2 cycle (tension past the
 //! snap-back, unloading, compression), implicit and IMPL-EX.
@@ -261,7 +261,7 @@ fn statev_mode_writes_the_damage_and_opening_mirrors() {
     let model = cache::model_for_file(&common::repo("scenes/paper_rve.toml")).unwrap();
     let n = model.statev_len();
     let (_, end) = run(&umat(), cmname, 31, 0..22, vec![0.0; n + 5]);
-    let core = rve::state::statev::read(
+    let core = mesorve_core::state::statev::read(
         &end[..n],
         model.state_sizes(),
         model.interface_points(),

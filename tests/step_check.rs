@@ -7,8 +7,8 @@ mod common;
 
 use std::sync::Arc;
 
+use mesorve_core::solver::TangentRequest;
 use rve::scene::{path_points, Scene};
-use rve::solver::TangentRequest;
 use rve::{Instance, Model, Response};
 
 /// The paper's RVE (section 5.2.1) pulled to 1.5e-4 in 10 increments, then to 2.25e-4

@@ -156,7 +156,7 @@ fn rve_run(dir: &Path, name: &str, text: &str) -> Vec<Row> {
     let scene = dir.join(format!("{name}.toml"));
     std::fs::write(&scene, text).unwrap();
     let out = dir.join(name);
-    let status = Command::new(env!("CARGO_BIN_EXE_rve"))
+    let status = Command::new(common::rve_exe())
         .args(["run", "--quiet", "--out"])
         .arg(&out)
         .arg(&scene)

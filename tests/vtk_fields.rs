@@ -119,7 +119,7 @@ fn cli_vtk_series_leaves_the_csv_unchanged() {
     let scene = common::repo("scenes/paper_rve.toml");
     let run = |out: &str, vtk: bool| {
         let out = dir.join(out);
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_rve"));
+        let mut cmd = Command::new(common::rve_exe());
         cmd.args(["run", scene.to_str().unwrap(), "--quiet", "--out"])
             .arg(&out);
         if vtk {
@@ -159,7 +159,7 @@ fn no_progress_bar_off_a_terminal_and_silence_with_quiet() {
     let dir = std::env::temp_dir().join(format!("rve_progress_{}", std::process::id()));
     let scene = common::repo("scenes/paper_rve.toml");
     let run = |quiet: bool| {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_rve"));
+        let mut cmd = Command::new(common::rve_exe());
         cmd.args(["run", scene.to_str().unwrap(), "--out"])
             .arg(&dir);
         if quiet {

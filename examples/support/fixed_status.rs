@@ -1,7 +1,7 @@
 //! A Newton loop with the contact status of every ITZ point held fixed, for the examples
 //! `contact_diagnosis` and `hard_cases` (see `docs/contact-algorithm.md`).
 
-use rve::interface::TangentKind;
+use mesorve_core::interface::TangentKind;
 use rve::{Model, Workspace};
 
 #[allow(dead_code)]
@@ -67,7 +67,7 @@ pub fn solve_fixed(
                 model.linear_solver(),
                 &disc.pattern.symbolic,
                 &k,
-                rve::solver::FactorUse::Reusable,
+                mesorve_core::solver::FactorUse::Reusable,
             )
             .ok()?;
         let mut dx: Vec<f64> = r.iter().map(|v| -v).collect();

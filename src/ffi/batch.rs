@@ -12,7 +12,7 @@ use crate::model::batch::{
     update_batch, BatchOutputs, BatchPoint, BatchStep, Failures, PointReport,
 };
 use crate::model::{Instance, Response};
-use crate::solver::TangentRequest;
+use mesorve_core::solver::TangentRequest;
 
 /// Per-point report of `rve_update_batch_timed`.
 #[repr(C)]

@@ -12,7 +12,7 @@ use super::status::RveStatus;
 use crate::model::batch::{BatchPoint, PointReport, Reliability};
 use crate::model::cache;
 use crate::model::{Instance, Model, Response};
-use crate::solver::TangentRequest;
+use mesorve_core::solver::TangentRequest;
 
 /// An RVE instance handle: a 64-bit integer id into a process-wide table, not a pointer.
 ///

@@ -21,7 +21,6 @@ mod umat;
 mod version;
 
 pub use crate::model::cache::model_builds;
-pub use crate::state::STATE_FORMAT_VERSION;
 pub use batch::{rve_update_batch, rve_update_batch_timed};
 pub use guard::rve_last_error;
 pub use init::rve_init;
@@ -31,6 +30,7 @@ pub use instance::{
     rve_state_save, rve_state_size, rve_update, rve_update_ex, rve_update_timed, rve_write_vtk,
     RveHandle, RveInfo, RveReliability, RveTangentRequest,
 };
+pub use mesorve_core::state::STATE_FORMAT_VERSION;
 pub use registry::live_instances;
 pub use status::{rve_status_message, RveStatus, ALL_STATUSES};
 pub use umat::{rve_umat, umat_, UMAT};

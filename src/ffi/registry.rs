@@ -164,7 +164,7 @@ mod tests {
     use super::*;
     use crate::error::Error;
     use crate::scene::Scene;
-    use crate::solver::TangentRequest;
+    use mesorve_core::solver::TangentRequest;
 
     #[test]
     fn ids_are_positive_double_exact_and_never_zero() {

@@ -35,8 +35,8 @@
 //!     rows and columns 5 and 6 is zero.
 
 use crate::error::{Error, Result};
-use crate::material::Analysis;
 use crate::model::{Model, Response};
+use mesorve_core::material::Analysis;
 
 /// Largest out-of-plane strain component (`eps_33`, `gamma_13`, `gamma_23`) taken as
 /// round-off and ignored. Concrete strains are 1e-5..1e-3; a host's round-off in a

@@ -47,7 +47,7 @@ use super::hypothesis::PlaneResponse;
 use crate::error::{Error, Result};
 use crate::model::{cache, Model};
 use crate::scene::DEFAULT_SCENE_TOML;
-use crate::solver::TangentRequest;
+use mesorve_core::solver::TangentRequest;
 
 /// The environment variable that lists the directories searched for scene files.
 pub const SCENE_PATH_VAR: &str = "MESORVE_SCENE_PATH";

@@ -32,9 +32,9 @@
 //! keeps the increment. A law without a characteristic opening (`linear_itz`), or a scene
 //! without interfaces, gives 0 for both.
 
-use crate::element::InterfaceGeometry;
-use crate::interface::InterfaceLaw;
 use crate::model::{Instance, Model};
+use mesorve_core::element::InterfaceGeometry;
+use mesorve_core::interface::InterfaceLaw;
 
 /// Mirrors written at most.
 pub const MIRRORS: usize = 5;

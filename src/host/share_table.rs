@@ -18,8 +18,8 @@ use std::sync::{Arc, Mutex, PoisonError};
 use super::values_hash::values_hash;
 use crate::model::share::{self, Follow, StepSignature};
 use crate::model::{Model, Response};
-use crate::state::statev::{Core, CoreView};
-use crate::state::LinearBranch;
+use mesorve_core::state::statev::{Core, CoreView};
+use mesorve_core::state::LinearBranch;
 
 /// The increment a table belongs to: the bits of `TIME(2)` and `DTIME`, and `KSTEP`.
 pub(super) type IncrementKey = (u64, u64, i32);

@@ -22,7 +22,7 @@
 //! **Why an environment variable**, not a scene key or a `PROPS` entry: which points to
 //! look at is a choice of one run, not a property of the material. A scene key or a
 //! `PROPS` value would change the material's fingerprint, which the `STATEV` state records
-//! ([`crate::state::statev`]): a restart with the switch turned on or off would then
+//! ([`mesorve_core::state::statev`]): a restart with the switch turned on or off would then
 //! refuse its own state. The points are the host's numbering, which a scene shared by
 //! several decks does not know. And the host's deck stays untouched: the same deck runs
 //! with and without pictures.
@@ -52,7 +52,7 @@ use std::sync::{Mutex, Once, PoisonError};
 use super::diagnostics::say;
 use crate::error::Error;
 use crate::model::Instance;
-use crate::solver::Integration;
+use mesorve_core::solver::Integration;
 
 /// The environment variable of the switch.
 pub const UMAT_VTK_VAR: &str = "MESORVE_UMAT_VTK";

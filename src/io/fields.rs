@@ -12,12 +12,12 @@
 
 use nalgebra::{SVector, Vector3};
 
-use crate::assembly::Discretization;
-use crate::constraint::FIXED;
-use crate::element::interface4;
-use crate::interface::{Branch, PointMeasures, TangentKind};
-use crate::mesh::Mesh;
-use crate::state::State;
+use mesorve_core::assembly::Discretization;
+use mesorve_core::constraint::FIXED;
+use mesorve_core::element::interface4;
+use mesorve_core::interface::{Branch, PointMeasures, TangentKind};
+use mesorve_core::mesh::Mesh;
+use mesorve_core::state::State;
 
 /// Branch codes of [`ItzFields::branch`].
 pub const BRANCH_LOADING: u8 = 0;

@@ -5,7 +5,7 @@
 use std::io::{self, Write};
 
 use super::fields::RveFields;
-use crate::mesh::{Mesh, Phase};
+use mesorve_core::mesh::{Mesh, Phase};
 
 /// Writes an SVG of `mesh`, `pixels` wide.
 pub fn write_svg(mesh: &Mesh, pixels: f64, w: &mut impl Write) -> io::Result<()> {

@@ -12,7 +12,7 @@
 use std::io::{self, Write};
 
 use super::fields::RveFields;
-use crate::mesh::Mesh;
+use mesorve_core::mesh::Mesh;
 
 const VTK_TRIANGLE: u8 = 5;
 const VTK_QUAD: u8 = 9;

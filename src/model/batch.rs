@@ -30,8 +30,8 @@ use super::share::{self, AdoptedStep, Follow, StepSignature};
 use super::workspaces::with_workspace;
 use super::{Instance, Model, Response};
 use crate::error::{Error, Result};
-use crate::solver::{implex, Integration, TangentRequest};
-use crate::state::State;
+use mesorve_core::solver::{implex, Integration, TangentRequest};
+use mesorve_core::state::State;
 
 /// How far to trust an update (MGIS-style).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -64,7 +64,7 @@ pub struct PointReport {
     /// suggestion, or 1 for a failure that a smaller step does not mend (a bad argument).
     pub suggested_step_ratio: f64,
     /// The IMPL-EX step's integration error estimate relative to `solver.step_tolerance`
-    /// (`eta / tol`, see `crate::solver::implex::error_estimate`; above 1 the step
+    /// (`eta / tol`, see `mesorve_core::solver::implex::error_estimate`; above 1 the step
     /// exceeds the tolerance); 0 when none is estimated (no `step_tolerance`, the implicit
     /// scheme, a failed update).
     pub error_estimate: f64,
@@ -406,26 +406,25 @@ fn solve_set<P: BatchPoint>(
     }
 }
 
-/// What a follower does after its anchor's solve.
-enum Followed {
-    /// It takes the anchor's answer corrected to first order (its trial is set).
-    Answer(Response),
-    /// It took the anchor's IMPL-EX step and answers on it in the second pass.
+/// What a follower whose anchor's answer it does not take does in the second pass.
+enum Pass {
+    /// It took the anchor's IMPL-EX step and answers on it.
     Step,
-    /// It solves its own RVE in the second pass.
+    /// It solves its own RVE.
     Solve,
 }
 
 /// Follower `k` after its anchor `j` answered `anchor`: under IMPL-EX it takes the
 /// anchor's step ([`Instance::adopt_step`]); else the anchor's answer corrected to first
-/// order with a trial of its own ([`share::follows`]), unless the error indicator refuses.
+/// order with a trial of its own ([`share::follows`]), unless the error indicator refuses:
+/// `Ok` the answer taken, `Err` what the second pass does.
 fn follow<P: BatchPoint>(
     points: &mut [P],
     (k, j): (usize, usize),
     strains: &[[f64; 3]],
     (step, plan): (BatchStep, &Plan),
     anchor: &Response,
-) -> Followed {
+) -> std::result::Result<Response, Pass> {
     let (left, right) = points.split_at_mut(k);
     let (eps, eps_a) = (strains[k], strains[j]);
     let signature = |p: usize| plan.sharers[p].as_ref().and_then(|s| s.step.as_ref());
@@ -441,7 +440,7 @@ fn follow<P: BatchPoint>(
                     twin: share::states_close(share::ROUND_OFF, b.committed(), a.committed()),
                 };
                 let taken = b.adopt_step(implex_step, ratio, step.dtime, adopted);
-                return taken.then_some(Followed::Step);
+                return taken.then_some(Err(Pass::Step));
             }
             let twin = share::states_close(0.0, b.committed(), a.committed());
             let r = share::corrected(anchor, &eps_a, &eps);
@@ -449,10 +448,10 @@ fn follow<P: BatchPoint>(
                 Follow::Twin => b.adopt_trial(a, eps, step.dtime, step.request, r).ok()?,
                 Follow::Own => b.keep_own_trial(eps, step.dtime, step.request, r),
             }
-            Some(Followed::Answer(r))
+            Some(Ok(r))
         })
     });
-    followed.flatten().flatten().unwrap_or(Followed::Solve)
+    followed.flatten().flatten().unwrap_or(Err(Pass::Solve))
 }
 
 /// The sharing batch (see the module documentation): anchors, then followers.
@@ -477,18 +476,18 @@ fn shared<P: BatchPoint>(
                 let r = *r;
                 follow(points, (k, j), strains, (step, plan), &r)
             }
-            _ => Followed::Solve,
+            _ => Err(Pass::Solve),
         };
         match followed {
-            Followed::Answer(r) => {
+            Ok(r) => {
                 results[k] = Some(Ok(r));
                 shared_from[k] = Some(j);
             }
-            Followed::Step => {
+            Err(Pass::Step) => {
                 again[k] = true;
                 shared_from[k] = Some(j);
             }
-            Followed::Solve => again[k] = true,
+            Err(Pass::Solve) => again[k] = true,
         }
     }
     let second = solve_set(points, strains, step, &again);

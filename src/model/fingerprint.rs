@@ -25,7 +25,7 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 use crate::scene::{GeometrySpec, Scene};
-pub use crate::state::statev::FINGERPRINT_BITS;
+pub use mesorve_core::state::statev::FINGERPRINT_BITS;
 
 /// FNV-1a, 64 bits: a small stable hash (not a cryptographic one: it tells states of
 /// different materials apart, it does not defend against forgery).

@@ -5,8 +5,8 @@
 
 use std::sync::Arc;
 
-use crate::interface::InterfaceLaw;
 use crate::scene::SceneSpec;
+use mesorve_core::interface::InterfaceLaw;
 
 /// The interface law of `[materials]`, or `None` without ITZ (`effects.cohesive` off, or
 /// no law given for a cell without inclusions).

@@ -1,7 +1,7 @@
 //! One material point: the committed state plus the last trial, over a shared model. The
 //! one trial/commit lifecycle of the crate: `rve run`, the tests and the C interface (one
 //! `Instance` behind each handle) all go through it, and so does checkpointing (the bytes
-//! of [`crate::state::persist`]).
+//! of [`mesorve_core::state::persist`]).
 
 use std::borrow::Cow;
 use std::cell::RefCell;
@@ -10,9 +10,9 @@ use std::sync::Arc;
 use super::rve_model::{Model, Response};
 use super::share::AdoptedStep;
 use crate::error::{Error, Result};
-use crate::solver::{implex, Answer, Integration, TangentRequest, Workspace};
-use crate::state::persist::{self, StateSizes};
-use crate::state::{Core, CoreView, State};
+use mesorve_core::solver::{implex, Answer, Integration, TangentRequest, Workspace};
+use mesorve_core::state::persist::{self, StateSizes};
+use mesorve_core::state::{Core, CoreView, State};
 
 /// An RVE instance: what a host keeps per integration point.
 ///
@@ -167,7 +167,7 @@ impl Instance {
     /// [`update`](Self::update) over a host time increment `dt` (`DTIME`; 0 or negative:
     /// none given). Implicit integration ignores it; IMPL-EX scales its extrapolation by
     /// the ratio of this step's `dt` to the last committed one's (see
-    /// `crate::solver::implex`).
+    /// `mesorve_core::solver::implex`).
     pub fn update_timed(
         &mut self,
         strain: [f64; 3],
@@ -375,7 +375,7 @@ impl Instance {
     /// `irreducible` (ratio 1): IMPL-EX's error falls with the step where it is the
     /// step's, so cutting the step did not touch this one (the RVE snapping back through
     /// the step; docs/step_control.md).
-    fn judge(&mut self, dt: f64, report: &mut crate::solver::IncrementReport) {
+    fn judge(&mut self, dt: f64, report: &mut mesorve_core::solver::IncrementReport) {
         let Some(e) = report.error_estimate.filter(|&e| e > 1.0) else {
             return;
         };
@@ -542,7 +542,7 @@ impl Instance {
         Ok(())
     }
 
-    /// The committed core of the pending trial (see `crate::state::statev`): what a host
+    /// The committed core of the pending trial (see `mesorve_core::state::statev`): what a host
     /// keeping the state in its own variables stores after this update. `NoTrial` when
     /// there is no pending trial.
     pub fn trial_core(&self) -> Result<Core> {
@@ -614,7 +614,7 @@ impl Instance {
         }
     }
 
-    /// The committed state's core (see `crate::state::statev`), at the strain the state
+    /// The committed state's core (see `mesorve_core::state::statev`), at the strain the state
     /// is committed at.
     pub fn committed_core(&self) -> Core {
         self.model.core_of(&self.committed)
@@ -705,10 +705,10 @@ impl Instance {
     }
 
     /// The IMPL-EX step the pending trial was answered on (`D_ex`, the jump operators
-    /// `A_q`, the frozen contact status: `crate::state::LinearBranch`), with the step ratio
+    /// `A_q`, the frozen contact status: `mesorve_core::state::LinearBranch`), with the step ratio
     /// `dt / dt_n` it was factorized for; `None` without a pending IMPL-EX trial that holds
     /// one. What [`adopt_step`](Self::adopt_step) gives another instance.
-    pub fn implex_step(&self) -> Option<(&crate::state::LinearBranch, u64)> {
+    pub fn implex_step(&self) -> Option<(&mesorve_core::state::LinearBranch, u64)> {
         match (self.pending, &self.trial, self.implex_step) {
             (Pending::Solved, Some(trial), Some(ratio)) if trial.linear.valid => {
                 Some((&trial.linear, ratio))
@@ -722,14 +722,14 @@ impl Instance {
     /// the step of this instance's committed state for `dt`: the next
     /// [`update_timed`](Self::update_timed) at `dt` answers on it without a factorization,
     /// `sigma = D_ex eps`, and forms this instance's own trial history from the jumps
-    /// `A_q eps` and its own committed history (`crate::solver::implex::finish_step`). The
+    /// `A_q eps` and its own committed history (`mesorve_core::solver::implex::finish_step`). The
     /// trial's fluctuation is not formed (outputs that need it refuse, as after any
     /// reused step at another strain). `false` (nothing changes): not an IMPL-EX model,
     /// no fast path, a step of another ratio than `dt`'s from this committed state, or a
     /// committed state whose own step carries over (exact, and free).
     pub fn adopt_step(
         &mut self,
-        step: &crate::state::LinearBranch,
+        step: &mesorve_core::state::LinearBranch,
         ratio: u64,
         dt: f64,
         adopted: AdoptedStep,
@@ -869,7 +869,7 @@ fn new_state(model: &Model, lean: bool) -> State {
 mod bodies {
     use std::cell::RefCell;
 
-    use crate::state::State;
+    use mesorve_core::state::State;
 
     /// The buffers of one trial's history, previous history and contact status.
     type Body = (Vec<f64>, Vec<f64>, Vec<u64>);

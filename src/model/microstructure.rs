@@ -3,13 +3,13 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::geometry::{build_inclusions, place_random, Inclusion};
-use crate::mesh::gmsh::read_msh;
-use crate::mesh::{
+use crate::scene::{GeometrySpec, Scene};
+use mesorve_core::geometry::{build_inclusions, place_random, Inclusion};
+use mesorve_core::mesh::gmsh::read_msh;
+use mesorve_core::mesh::{
     insert_itz, triangulate, triangulate_straight_interface, without_itz, Mesh, Microstructure,
     PhaseMesh,
 };
-use crate::scene::{GeometrySpec, Scene};
 
 /// Builds the mesh that `scene` describes.
 pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
@@ -84,7 +84,7 @@ fn finish(phase_mesh: PhaseMesh, width: f64, height: f64, cohesive: bool) -> Res
 /// Moves a Gmsh mesh so its bounding box starts at the origin, and checks that the box is
 /// the scene's cell.
 fn fit_to_cell(mut pm: PhaseMesh, width: f64, height: f64, path: &Path) -> Result<PhaseMesh> {
-    let bb = crate::geometry::polygon::bounding_box(&pm.nodes);
+    let bb = mesorve_core::geometry::polygon::bounding_box(&pm.nodes);
     let (w, h) = (bb[2] - bb[0], bb[3] - bb[1]);
     let tol = 1e-6 * width.max(height);
     if (w - width).abs() > tol || (h - height).abs() > tol {

@@ -1,6 +1,6 @@
 //! The safe Rust API: a shared immutable [`Model`] per scene, a small [`Instance`] per
 //! material point (its trial/commit lifecycle and its checkpoint bytes), and a per-thread
-//! [`crate::solver::Workspace`]. `from_scene` is the edge where the scene schema becomes
+//! [`mesorve_core::solver::Workspace`]. `from_scene` is the edge where the scene schema becomes
 //! the numerical modules' own types.
 
 pub mod batch;

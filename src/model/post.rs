@@ -7,7 +7,7 @@ use std::path::Path;
 use super::rve_model::Model;
 use crate::error::{Error, Result};
 use crate::io::{write_vtu_fields, RveFields};
-use crate::state::State;
+use mesorve_core::state::State;
 
 impl Model {
     /// The micro fields of `state` (a state of this model) on the mesh; a state left by

@@ -7,17 +7,17 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::fingerprint::scene_fingerprint;
 use super::from_scene::interface_law;
 use super::microstructure::build_microstructure;
-use crate::assembly::{Discretization, DiscretizationSpec};
-use crate::constraint::BoundaryCondition;
 use crate::error::{Error, Result};
-use crate::homogenization::Homogenizer;
-use crate::mesh::{Mesh, MeshStats, Microstructure};
 use crate::scene::{Scene, MAX_STRAIN};
-use crate::solver::{
+use mesorve_core::assembly::{Discretization, DiscretizationSpec};
+use mesorve_core::constraint::BoundaryCondition;
+use mesorve_core::homogenization::Homogenizer;
+use mesorve_core::mesh::{Mesh, MeshStats, Microstructure};
+use mesorve_core::solver::{
     fast_path, implex, solve_increment, step_check, Answer, IncrementReport, Integration,
     LinearSolver, Problem, Settings, TangentRequest, Workspace,
 };
-use crate::state::{statev, State};
+use mesorve_core::state::{statev, State};
 
 static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(1);
 
@@ -205,7 +205,7 @@ impl Model {
     /// and (if asked) the consistent tangent. Never modifies `committed`; identical inputs
     /// give bit-identical outputs.
     ///
-    /// The trial keeps the fast path's data (`crate::state::LinearBranch`) when every
+    /// The trial keeps the fast path's data (`mesorve_core::state::LinearBranch`) when every
     /// interface point ends on a linear branch and the tangent was requested; this
     /// function always solves ([`Model::fast_update`] is the fast path).
     pub fn update(
@@ -270,7 +270,7 @@ impl Model {
     }
 
     /// An IMPL-EX update at `strain` from `committed` for a host time increment `dt` (0:
-    /// none, see `crate::solver::implex`). With `reuse`, `trial.linear` already holds the
+    /// none, see `mesorve_core::solver::implex`). With `reuse`, `trial.linear` already holds the
     /// step of this `committed` state and this `dt` ratio, and the answer costs no
     /// factorization; otherwise the step is assembled and factorized once and kept there.
     /// Never modifies `committed`. The tangent is the step's `D_ex`, symmetric positive
@@ -341,7 +341,7 @@ impl Model {
         })
     }
 
-    /// The fast path's answer at `strain` from `committed` (see `crate::solver::fast_path`):
+    /// The fast path's answer at `strain` from `committed` (see `mesorve_core::solver::fast_path`):
     /// `Some` when every interface point provably stays on the linear branch of the
     /// committed state's branch set, `None` when the update needs a solve. Exact to
     /// round-off against [`Model::update`]; the trial state is `committed` at `strain`
@@ -378,7 +378,7 @@ impl Model {
     }
 
     /// `state` with its unknowns at its own strain: itself, or (after fast updates, see
-    /// `crate::state::LinearBranch`) a copy with `X_b eps` formed, which costs one
+    /// `mesorve_core::state::LinearBranch`) a copy with `X_b eps` formed, which costs one
     /// factorization in a workspace made for it. For outputs, not for the hot path.
     pub fn current_state<'s>(&self, state: &'s State) -> Result<Cow<'s, State>> {
         if state.unknowns_are_current() {
@@ -430,8 +430,8 @@ fn check_strain(strain: [f64; 3]) -> Result<()> {
     Ok(())
 }
 
-/// The model's parts, for the verification tests and benches (`internals` feature).
-#[cfg(feature = "internals")]
+/// The model's parts in the core's types (the verification tests and benches check the
+/// kernels and factorizations of a built model through them).
 impl Model {
     pub fn microstructure(&self) -> &Microstructure {
         &self.microstructure

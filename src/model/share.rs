@@ -45,9 +45,9 @@
 //! (`crate::host`).
 
 use super::{Model, Response};
-use crate::interface::InterfaceLaw;
-use crate::state::statev::CoreView;
-use crate::state::{Core, LinearBranch, State, JUMP_OPERATOR_LEN};
+use mesorve_core::interface::InterfaceLaw;
+use mesorve_core::state::statev::CoreView;
+use mesorve_core::state::{Core, LinearBranch, State, JUMP_OPERATOR_LEN};
 
 /// The strain scale below which strains count as equal to within `tol` times it: a tenth
 /// of the paper's concrete's tensile peak strain (about 1.3e-4), so that points near zero
@@ -161,7 +161,7 @@ impl StepSignature {
     /// The signature of `core`'s step at ratio `ratio` in `model`. Allocates its secants
     /// alone: each point's history is extrapolated on the stack.
     pub fn of(model: &Model, core: &CoreView<'_>, ratio: f64) -> Self {
-        let previous = crate::solver::implex::extrapolated_from(core.history, core.previous);
+        let previous = mesorve_core::solver::implex::extrapolated_from(core.history, core.previous);
         let secants = point_secants(model, |q, law, out| {
             let range = q * out.len()..(q + 1) * out.len();
             law.extrapolate(&core.history[range.clone()], &previous[range], ratio, out);
@@ -271,7 +271,7 @@ impl AdoptedStep {
         let d = step_difference(model, step, &self.own, &self.anchor, strain);
         let own_history = self.twin
             || strains_close(ROUND_OFF, strain, &self.anchor_strain)
-            || crate::solver::implex::stays_still(
+            || mesorve_core::solver::implex::stays_still(
                 &model.problem(),
                 committed,
                 step,

@@ -1,13 +1,13 @@
-//! A state's committed core ([`crate::state::statev`]) and back: what a host that keeps
+//! A state's committed core ([`mesorve_core::state::statev`]) and back: what a host that keeps
 //! the RVE state in its own state variables stores, and the full state the solver starts
 //! from, rebuilt from it alone.
 
 use super::rve_model::Model;
 use crate::error::{Error, Result};
-use crate::solver::{implex, ContactStatus, Integration, Workspace};
-use crate::state::persist::StateSizes;
-use crate::state::statev::{Core, CoreView};
-use crate::state::{held_contact_words, State};
+use mesorve_core::solver::{implex, ContactStatus, Integration, Workspace};
+use mesorve_core::state::persist::StateSizes;
+use mesorve_core::state::statev::{Core, CoreView};
+use mesorve_core::state::{held_contact_words, State};
 
 impl Model {
     /// The sizes of this model's states.
@@ -35,7 +35,7 @@ impl Model {
         self.core_view_of(state).to_core()
     }
 
-    /// [`core_of`](Self::core_of) borrowing the state's buffers (for [`crate::state::statev::write`]:
+    /// [`core_of`](Self::core_of) borrowing the state's buffers (for [`mesorve_core::state::statev::write`]:
     /// no copy of the histories).
     pub fn core_view_of<'a>(&self, state: &'a State) -> CoreView<'a> {
         let points = self.disc.interface_points();

@@ -6,7 +6,7 @@ use std::cell::RefCell;
 use std::sync::{Arc, Weak};
 
 use crate::model::Model;
-use crate::solver::Workspace;
+use mesorve_core::solver::Workspace;
 
 thread_local! {
     /// Keyed by the model's address; the weak reference keeps that address from being

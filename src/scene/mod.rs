@@ -8,8 +8,8 @@ mod path;
 mod schema;
 mod validate;
 
-pub use crate::geometry::{Explicit, ExplicitInclusion, Orientation, RandomSpec, ShapeKind};
 pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
+pub use mesorve_core::geometry::{Explicit, ExplicitInclusion, Orientation, RandomSpec, ShapeKind};
 pub use path::{path_points, MAX_STRAIN};
 pub use schema::{
     BoundaryKind, BoundarySpec, CellSpec, ContactStatusSpec, EffectsSpec, ElasticSpec,

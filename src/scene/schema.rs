@@ -4,13 +4,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::constraint::BoundaryCondition;
-use crate::element::InterfaceQuadrature;
-use crate::geometry::{Explicit, RandomSpec};
-use crate::interface::InterfaceLawSpec;
-pub use crate::interface::{ItzSpec, LinearItzSpec, PenaltySpec};
-use crate::material::{Analysis, IsotropicElastic};
-use crate::solver::{ContactStatus, Integration, Settings};
+use mesorve_core::constraint::BoundaryCondition;
+use mesorve_core::element::InterfaceQuadrature;
+use mesorve_core::geometry::{Explicit, RandomSpec};
+use mesorve_core::interface::InterfaceLawSpec;
+pub use mesorve_core::interface::{ItzSpec, LinearItzSpec, PenaltySpec};
+use mesorve_core::material::{Analysis, IsotropicElastic};
+use mesorve_core::solver::{ContactStatus, Integration, Settings};
 
 /// The whole scene file.
 #[derive(Clone, Debug, Deserialize, Serialize)]

@@ -3,12 +3,12 @@
 use super::path::MAX_STRAIN;
 use super::schema::*;
 use crate::error::{require_positive, Error, Result};
-use crate::geometry::{Explicit, Orientation, RandomSpec, ShapeKind};
+use mesorve_core::geometry::{Explicit, Orientation, RandomSpec, ShapeKind};
 
 /// Densest random packing we attempt; above it random sequential placement jams.
 pub const MAX_AREA_FRACTION: f64 = 0.7;
 // The bound on the estimated triangle count, to refuse runaway mesh sizes.
-pub use crate::mesh::MAX_TRIANGLES;
+pub use mesorve_core::mesh::MAX_TRIANGLES;
 /// Upper bound on the increments of the whole strain path (all `[[path]]` segments): the
 /// path is materialized as one strain per increment.
 pub const MAX_PATH_INCREMENTS: u64 = 1_000_000;
@@ -215,7 +215,7 @@ fn validate_solver(s: &SolverSpec) -> Result<()> {
                 format!("must be below 1 (a relative error), got {t}"),
             ));
         }
-        if s.integration != crate::solver::Integration::Implex {
+        if s.integration != mesorve_core::solver::Integration::Implex {
             return Err(Error::scene(
                 "solver.step_tolerance",
                 "applies to integration = \"implex\" only: the implicit scheme's step is \

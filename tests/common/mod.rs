@@ -2,31 +2,11 @@
 #![allow(dead_code)]
 
 pub mod hard_paths;
+mod paths;
 pub mod share_paths;
 
-use std::path::{Path, PathBuf};
-
-use rve::scene::Scene;
-
-/// Path of a file in the repository.
-pub fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
-
-/// Loads a shipped scene.
-pub fn scene(rel: &str) -> Scene {
-    Scene::from_file(repo(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
-}
-
-/// The paper scene with text replacements applied (for variations and bad inputs).
-pub fn paper_scene_with(replacements: &[(&str, &str)]) -> String {
-    let mut text = std::fs::read_to_string(repo("scenes/paper_rve.toml")).unwrap();
-    for (from, to) in replacements {
-        assert!(text.contains(from), "scene text has no `{from}`");
-        text = text.replacen(from, to, 1);
-    }
-    text
-}
+#[allow(unused_imports)]
+pub use paths::{paper_scene_with, repo, rve_exe, scene};
 
 /// One `update_batch` of `points` at `strains` (`dtime` 1, the consistent tangent, on
 /// `threads`), every point succeeding: their stresses and reports.
@@ -103,7 +83,12 @@ pub fn follow_committed(instance: &mut rve::Instance, points: &[[f64; 3]]) -> Ve
             .sqrt();
         previous = eps;
         let r = instance
-            .update_timed(eps, dt, &mut ws, rve::solver::TangentRequest::Consistent)
+            .update_timed(
+                eps,
+                dt,
+                &mut ws,
+                mesorve_core::solver::TangentRequest::Consistent,
+            )
             .unwrap();
         instance.commit().unwrap();
         out.push(r);

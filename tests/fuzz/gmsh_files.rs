@@ -14,7 +14,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use arbitrary::{Arbitrary, Unstructured};
-use rve::mesh::gmsh::parse_msh;
+use mesorve_core::mesh::gmsh::parse_msh;
 use rve::{Error, Model, Scene, TangentRequest};
 
 use crate::driver::{self, Tally};

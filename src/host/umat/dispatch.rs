@@ -10,7 +10,7 @@ use super::table::{plain, Failed, Umat};
 use super::table_mode::table_refused;
 use crate::error::Error;
 use crate::host::mirrors::MIRRORS;
-use crate::solver::Integration;
+use mesorve_core::solver::Integration;
 
 /// `NSTATV` up to this keeps the state in the library's table (room for the mirrors).
 pub const TABLE_MODE_MAX_NSTATV: usize = MIRRORS;

@@ -19,9 +19,9 @@ use crate::model::share::{self, StepSignature};
 use crate::model::workspaces::with_workspace;
 use crate::model::Response;
 use crate::scene::ZeroAtStrain;
-use crate::solver::TangentRequest;
-use crate::solver::{Answer, Integration};
-use crate::state::statev::{self, CoreView};
+use mesorve_core::solver::TangentRequest;
+use mesorve_core::solver::{Answer, Integration};
+use mesorve_core::state::statev::{self, CoreView};
 
 /// `STRAN` and the state's committed strain agree when they differ by at most this
 /// fraction of the larger of the two (infinity norms) plus [`STRAIN_MATCH_FLOOR`]. A host
@@ -343,7 +343,8 @@ impl Umat {
     /// no tolerance, or the point already holds its step).
     fn shared_step(&self, p: &mut Point, c: &UmatCall) -> Option<StepLookup> {
         let tol = sharing(p).filter(|_| implex_model(p))?;
-        let ratio = crate::solver::implex::step_ratio(p.instance.committed().implex.step, c.dtime);
+        let ratio =
+            mesorve_core::solver::implex::step_ratio(p.instance.committed().implex.step, c.dtime);
         if p.instance
             .implex_step()
             .is_some_and(|(_, r)| r == ratio.to_bits())

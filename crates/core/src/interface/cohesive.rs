@@ -230,7 +230,6 @@ impl CohesiveLaw {
 
     /// Initial (virgin) stiffness `e sigma_c / delta_c`, the slope of eq. 23 at the origin.
     #[inline]
-    #[cfg(any(test, feature = "internals"))]
     pub fn initial_stiffness(&self) -> f64 {
         std::f64::consts::E * self.sigma_c / self.delta_c
     }
@@ -238,7 +237,6 @@ impl CohesiveLaw {
     /// The loading envelope (eq. 23): `t(delta) = e sigma_c (delta/delta_c) exp(-delta/delta_c)`.
     /// Its maximum is `sigma_c`, at `delta = delta_c`.
     #[inline]
-    #[cfg(any(test, feature = "internals"))]
     pub fn envelope(&self, delta: f64) -> f64 {
         self.loading_secant(delta) * delta
     }
@@ -251,7 +249,6 @@ impl CohesiveLaw {
 
     /// `t_max = t(delta_max)` of a history (eq. 23).
     #[inline]
-    #[cfg(any(test, feature = "internals"))]
     pub fn t_max(&self, history: &CohesiveHistory) -> f64 {
         self.envelope(history.delta_max)
     }

@@ -7,13 +7,10 @@ mod model;
 mod stats;
 mod triangulate;
 
-#[cfg(any(test, feature = "internals"))]
 pub use boundary::{find_boundary_nodes, find_boundary_nodes_split};
 pub use itz::{insert_itz, without_itz};
-#[cfg(any(test, feature = "internals"))]
 pub use model::BoundaryNodes;
 pub use model::{InterfaceElement, Mesh, Microstructure, Phase, PhaseMesh, Triangle};
-#[cfg(any(test, feature = "internals"))]
 pub use stats::triangle_angles_deg;
 pub use stats::MeshStats;
 pub use triangulate::{triangulate, triangulate_straight_interface};

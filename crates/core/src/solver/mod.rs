@@ -27,15 +27,11 @@ mod tangent;
 mod workspace;
 
 pub use increment::solve_increment;
-#[cfg(any(test, feature = "internals"))]
 pub use increment::Solved;
 pub use problem::Problem;
-#[cfg(any(test, feature = "internals"))]
 pub use problem::Strain;
 pub use settings::{Answer, ContactStatus, IncrementReport, Integration, Settings, TangentRequest};
 pub use sparse_direct::{FactorKind, LinearSolver};
-#[cfg(any(test, feature = "internals"))]
 pub use sparse_direct::{FactorMethod, NumericFactor};
 pub use workspace::Workspace;
-#[cfg(any(test, feature = "internals"))]
 pub use workspace::{FactorUse, Factorization};

@@ -99,7 +99,6 @@ impl Homogenizer {
     }
 
     /// `D_hom = D_Taylor - (1/V) G^T X` with `X = K^-1 G` (n x 3, column-major), row-major.
-    #[cfg(any(test, feature = "internals"))]
     pub fn tangent(&self, disc: &Discretization, kg: &[f64]) -> [f64; 9] {
         let n = disc.n();
         let mut condensed = [0.0; 9];

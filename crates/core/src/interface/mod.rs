@@ -6,13 +6,10 @@ mod implex;
 mod law;
 mod linear;
 
-#[cfg(any(test, feature = "internals"))]
 pub use cohesive::{CohesiveHistory, CohesivePoint};
-#[cfg(any(test, feature = "internals"))]
 pub use cohesive::{CohesiveLaw, ContactShear, Penalty};
 pub use cohesive::{ItzSpec, PenaltySpec};
 pub use implex::Implex;
 pub use law::{Branch, InterfaceLaw, InterfaceLawSpec, LawPoint, PointMeasures, TangentKind};
-#[cfg(any(test, feature = "internals"))]
 pub use linear::LinearInterface;
 pub use linear::LinearItzSpec;

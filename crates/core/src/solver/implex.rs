@@ -235,7 +235,13 @@ pub fn stays_still(
         let closed = law.is_closed(jump);
         let range = q * hl..(q + 1) * hl;
         let length = problem.disc.interfaces[q / np].length;
-        law.trial_history_as(&committed.history[range.clone()], trial, jump, length, closed);
+        law.trial_history_as(
+            &committed.history[range.clone()],
+            trial,
+            jump,
+            length,
+            closed,
+        );
         closed == committed.implex.is_closed(q)
             && trial
                 .iter()

@@ -20,7 +20,6 @@
 //! (the strain is constant, one-point quadrature is exact).
 
 use nalgebra::{Matrix3, SMatrix};
-#[cfg(any(test, feature = "internals"))]
 use nalgebra::{SVector, Vector3};
 
 /// Strain-displacement matrix `B` (3x6) and the signed area `A` of a triangle.
@@ -45,7 +44,6 @@ pub fn b_matrix(coords: &[[f64; 2]; 3]) -> (SMatrix<f64, 3, 6>, f64) {
 
 /// Strain `[eps_xx, eps_yy, gamma_xy] = B u`.
 #[inline]
-#[cfg(any(test, feature = "internals"))]
 pub fn strain(b: &SMatrix<f64, 3, 6>, u: &SVector<f64, 6>) -> Vector3<f64> {
     b * u
 }
@@ -59,7 +57,6 @@ pub fn stiffness(b: &SMatrix<f64, 3, 6>, area: f64, d: &Matrix3<f64>) -> SMatrix
 
 /// Internal force `|A| B^T sigma` (6-vector) for the element's constant stress.
 #[inline]
-#[cfg(any(test, feature = "internals"))]
 pub fn internal_force(b: &SMatrix<f64, 3, 6>, area: f64, stress: &Vector3<f64>) -> SVector<f64, 6> {
     (b.transpose() * stress) * area.abs()
 }

@@ -7,7 +7,6 @@ pub mod persist;
 pub mod statev;
 
 pub use instance_state::{held_contact_words, PathCurvature, Quantized, State};
-#[cfg(any(test, feature = "internals"))]
 pub use instance_state::{ImplexHistory, Sensitivity, SENSITIVITY_BLOCK};
 pub use linear_branch::{LinearBranch, JUMP_OPERATOR_LEN};
 pub use persist::{StateSizes, STATE_FORMAT_VERSION};

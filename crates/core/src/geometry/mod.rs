@@ -5,10 +5,8 @@ pub mod polygon;
 mod shape;
 mod spec;
 
-#[cfg(any(test, feature = "internals"))]
 pub use placement::Placement;
 pub use placement::{build_inclusions, place_random};
 pub use shape::Inclusion;
-#[cfg(any(test, feature = "internals"))]
 pub use spec::RandomWord;
 pub use spec::{Explicit, ExplicitInclusion, Orientation, RandomSpec, ShapeKind};

@@ -1,5 +1,6 @@
 //! The `rve` binary: `rve mesh` JSON statistics, VTK and SVG output, error exit codes.
 
+#[path = "../../../tests/common/paths.rs"]
 mod common;
 
 use std::process::Command;

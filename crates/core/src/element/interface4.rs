@@ -162,14 +162,12 @@ pub struct InterfaceResponse {
 impl InterfaceResponse {
     /// True when some point is on the loading branch.
     #[inline]
-    #[cfg(any(test, feature = "internals"))]
     pub fn any_loading(&self) -> bool {
         self.loading > 0
     }
 
     /// True when some point is in contact.
     #[inline]
-    #[cfg(any(test, feature = "internals"))]
     pub fn any_contact(&self) -> bool {
         self.contact > 0
     }
@@ -212,7 +210,6 @@ pub fn local_jumps(
 ///
 /// # Panics
 /// If `committed` or `trial` is shorter than `quadrature.num_points()`.
-#[cfg(any(test, feature = "internals"))]
 pub fn evaluate(
     geometry: &InterfaceGeometry,
     quadrature: InterfaceQuadrature,

@@ -77,7 +77,6 @@
 
 use std::collections::{HashMap, HashSet};
 use std::fs;
-#[cfg(any(test, feature = "internals"))]
 use std::io::{self, Write};
 use std::path::Path;
 use std::str::FromStr;
@@ -86,17 +85,13 @@ use crate::error::{Error, Result};
 use crate::mesh::{Phase, PhaseMesh, Triangle, MAX_TRIANGLES};
 
 /// Name of the physical surface group of the matrix in files we write.
-#[cfg(any(test, feature = "internals"))]
 pub const MATRIX_GROUP: &str = "matrix";
 /// Physical (and elementary) tag of the matrix in files we write. (Not `pub`: cbindgen
 /// would export it into the C header.)
-#[cfg(any(test, feature = "internals"))]
 const MATRIX_TAG: i64 = 1;
 /// Name of the physical surface group of the inclusions in files we write.
-#[cfg(any(test, feature = "internals"))]
 pub const AGGREGATE_GROUP: &str = "aggregate";
 /// Physical (and elementary) tag of the inclusions in files we write.
-#[cfg(any(test, feature = "internals"))]
 const AGGREGATE_TAG: i64 = 2;
 
 /// A triangle is degenerate when twice its area is at most this fraction of the square
@@ -1172,7 +1167,6 @@ fn truncate(text: &str, max: usize) -> String {
 ///
 /// Coordinates are written in Rust's shortest round-trip form (`{:?}`), so reading the
 /// file back gives bit-identical coordinates.
-#[cfg(any(test, feature = "internals"))]
 pub fn write_msh22(mesh: &PhaseMesh, w: &mut impl Write) -> io::Result<()> {
     write_header(w, "2.2")?;
     writeln!(w, "$Nodes\n{}", mesh.nodes.len())?;
@@ -1193,7 +1187,6 @@ pub fn write_msh22(mesh: &PhaseMesh, w: &mut impl Write) -> io::Result<()> {
 /// The two phases are the surface entities 1 (matrix) and 2 (aggregate), each in
 /// the physical group of the same tag. A node is written in the aggregate entity's block
 /// when only inclusion triangles use it, otherwise in the matrix entity's block.
-#[cfg(any(test, feature = "internals"))]
 pub fn write_msh41(mesh: &PhaseMesh, w: &mut impl Write) -> io::Result<()> {
     let [in_matrix, in_aggregate] = PHASES.map(|phase| used_by(mesh, phase));
     // Every node is written once, in the block of one entity.
@@ -1259,11 +1252,9 @@ pub fn write_msh41(mesh: &PhaseMesh, w: &mut impl Write) -> io::Result<()> {
 }
 
 /// The phases in the order of their tags.
-#[cfg(any(test, feature = "internals"))]
 const PHASES: [Phase; 2] = [Phase::Matrix, Phase::Inclusion];
 
 /// The indices `0..len` grouped by phase, in [`PHASES`] order, empty groups left out.
-#[cfg(any(test, feature = "internals"))]
 fn group_by_phase(len: usize, phase_of: impl Fn(usize) -> Phase) -> Vec<(Phase, Vec<usize>)> {
     PHASES
         .iter()
@@ -1273,7 +1264,6 @@ fn group_by_phase(len: usize, phase_of: impl Fn(usize) -> Phase) -> Vec<(Phase, 
 }
 
 /// Which nodes the triangles of `phase` use.
-#[cfg(any(test, feature = "internals"))]
 fn used_by(mesh: &PhaseMesh, phase: Phase) -> Vec<bool> {
     let mut used = vec![false; mesh.nodes.len()];
     for t in mesh.triangles.iter().filter(|t| t.phase == phase) {
@@ -1287,7 +1277,6 @@ fn used_by(mesh: &PhaseMesh, phase: Phase) -> Vec<bool> {
 }
 
 /// `$MeshFormat` and `$PhysicalNames`, common to both writers.
-#[cfg(any(test, feature = "internals"))]
 fn write_header(w: &mut impl Write, version: &str) -> io::Result<()> {
     writeln!(w, "$MeshFormat\n{version} 0 8\n$EndMeshFormat")?;
     writeln!(w, "$PhysicalNames\n2")?;
@@ -1296,7 +1285,6 @@ fn write_header(w: &mut impl Write, version: &str) -> io::Result<()> {
     writeln!(w, "$EndPhysicalNames")
 }
 
-#[cfg(any(test, feature = "internals"))]
 fn phase_tag(phase: Phase) -> i64 {
     match phase {
         Phase::Matrix => MATRIX_TAG,

@@ -5,5 +5,4 @@ pub mod interface4;
 pub mod triangle;
 
 pub use interface4::{InterfaceGeometry, InterfaceQuadrature};
-#[cfg(any(test, feature = "internals"))]
 pub use interface4::{InterfaceResponse, MAX_POINTS};
