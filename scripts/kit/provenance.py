@@ -13,7 +13,7 @@ The commit is followed by ", with uncommitted changes in ..." when the work tree
 from it (in the given paths, by default anywhere). A study driven by a shell script
 records its start in a file first:
 
-    python3 scripts/study_provenance.py FILE.json
+    python3 scripts/kit/provenance.py FILE.json
 
 and its report reads it back with `load(FILE.json)`. Standard library only.
 """
@@ -26,7 +26,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MAX_NAMED = 6  # uncommitted files named on the page; the rest are counted
 
 
@@ -114,5 +114,5 @@ def load(file):
 
 if __name__ == "__main__":
     if len(sys.argv) != 2:
-        sys.exit("usage: study_provenance.py FILE.json   (records the start of a study)")
+        sys.exit("usage: provenance.py FILE.json   (records the start of a study)")
     save(start(), sys.argv[1])
