@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
-"""Reads the member example's ccx runs (calculix_examples/member_beam.py's decks) and
-writes and checks its figures. Standard library only.
+#!/usr/bin/env python3
+"""The member example's figures and checks, from its ccx run (calculix_examples/
+member_beam.py's decks): scripts/test-member's, and the member studies' figures
+(studies/member, studies/member-accuracy and studies/share-member read its readers).
+Standard library only.
 
-  member_study.py figures JOB OUT_DIR [LABEL=JOB ...]
+  member_figures.py figures JOB OUT_DIR [LABEL=JOB ...]
       From JOB.inp and JOB.dat: the load-deflection curve (OUT_DIR/curve.csv and
       OUT_DIR/curve.svg, with the curves of the other LABEL=JOB runs drawn beside it), and
       at each stage increment of the deck every in-plane RVE point's damage and largest
@@ -11,24 +14,9 @@ writes and checks its figures. Standard library only.
       around it), OUT_DIR/stages.pvd (the series) and OUT_DIR/damage.svg (the member
       coloured by damage at the stages). Prints the figures, then runs `check` on them.
 
-  member_study.py check JOB
+  member_figures.py check JOB
       The checks of scripts/test-member (below); exit status 1 with the reasons when one
       fails.
-
-  member_study.py table LABEL=JOB:THREADS ...
-      The Markdown table of wall time, peak memory, the RVE's share of the CPU time,
-      increments and ccx iterations of timed runs (scripts/member-study): JOB.time is
-      /usr/bin/time -v's report, JOB.times.csv calculix_examples/umat_timing.c's (the
-      calling thread's CPU time of every UMAT call); the RVE share is their sum over
-      ccx's CPU time (user + system, all threads).
-
-  member_study.py compare JOB JOB
-      The largest difference between two runs' forces, over the largest force (the same
-      deck on 1 and 2 threads).
-
-  member_study.py provenance START.json RUNS
-      The provenance sentence (scripts/study_provenance.py) of a study started with
-      `study_provenance.py START.json`: commit, machine, load at the start and now.
 
 Why the .dat and not the .frd: ccx writes element variables to the .frd extrapolated to
 the nodes and averaged over the elements around each node, so the .frd has no point's own
@@ -38,20 +26,16 @@ its C3D8 one element thick: 8 integration points, two layers of 4 at z = -/+ t/(
 with the same in-plane strain, so every in-plane point is solved twice; the figures use
 the z < 0 layer and `check` requires the other layer's mirrors to be equal to 1e-12.
 """
-import csv
-import math
 import os
 import re
 import sys
 import xml.etree.ElementTree as ET
 
-from studykit import COLOURS, svg_plot
-from calculix_report import sta
-import study_provenance
+from kit.ccx import dat_blocks, dat_points, sta
+from kit.plot import COLOURS, svg_plot
 
 DEPVAR = 795  # member_beam.py's *DEPVAR: umat_nstatv 790 + the five mirrors
 DAMAGE, OPENING = DEPVAR - 2, DEPVAR - 1  # 0-based: SDV 794 and 795
-HEADER = re.compile(r"\s*(?:total )?(.+?) \(.*\) for set (\w+) and time\s+(\S+)")
 # The checks' thresholds (scripts/test-member; docs/structure.md gives the measured values).
 # The force at the largest downward displacement must be below the elastic force (the
 # first increment's stiffness times the displacement) by at least SOFTER: four times the
@@ -78,7 +62,7 @@ DAMAGED = 0.1
 
 
 def fail(msg):
-    sys.exit(f"member_study: FAIL: {msg}")
+    sys.exit(f"member_figures: FAIL: {msg}")
 
 
 def read_inp(path):
@@ -105,44 +89,19 @@ def read_dat(path):
     """(curve [(time, U, F)], {time: {(element, point): [x, y, z, damage, opening]}}): the
     LOAD node's displacement and reaction at every increment, and the mirrors and
     coordinates of every point at the increments that printed them."""
-    force, disp, stages = {}, {}, {}
-    kind = None
-    record = None
-
-    def close():
-        if record is not None:
-            values = record[2]
+    force = {t: rows[-1][1] for t, rows in dat_blocks(path, "force").items() if rows}
+    disp = {t: rows[-1][2] for t, rows in dat_blocks(path, "displacements").items() if rows}
+    stages = {}
+    for t, points in dat_points(path, "global coordinates").items():
+        for key, xyz in points.items():
+            stages.setdefault(t, {}).setdefault(key, [None] * 3)[:3] = xyz[:3]
+    for t, points in dat_points(path, "internal state variables").items():
+        for (element, point), values in points.items():
             if len(values) != DEPVAR:
-                fail(f"{path}: element {record[0]} point {record[1]}: {len(values)} state "
+                fail(f"{path}: element {element} point {point}: {len(values)} state "
                      f"variables, *DEPVAR is {DEPVAR}")
-            stages[t].setdefault(record[:2], [None] * 3)[3:] = [float(values[DAMAGE]),
-                                                               float(values[OPENING])]
-
-    with open(path) as f:
-        for line in f:
-            m = HEADER.match(line)
-            if m:
-                close()
-                record, kind, t = None, m.group(1), float(m.group(3))
-                continue
-            tokens = line.split()
-            if not tokens:
-                continue
-            if kind == "force":
-                force[t] = float(tokens[1])
-            elif kind == "displacements":
-                disp[t] = float(tokens[2])
-            elif kind == "global coordinates":
-                p = stages.setdefault(t, {}).setdefault((int(tokens[0]), int(tokens[1])), [None] * 3)
-                p[:3] = [float(v) for v in tokens[2:5]]
-            elif kind == "internal state variables":
-                stages.setdefault(t, {})
-                if "." not in tokens[0] and "E" not in tokens[0]:
-                    close()
-                    record = (int(tokens[0]), int(tokens[1]), tokens[2:])
-                else:
-                    record[2].extend(tokens)
-        close()
+            stages.setdefault(t, {}).setdefault((element, point), [None] * 3)[3:] = [
+                values[DAMAGE], values[OPENING]]
     return [(t, disp[t], force[t]) for t in sorted(force)], stages
 
 
@@ -289,7 +248,7 @@ def figures(job, out, others):
     damage_svg(os.path.join(out, "damage.svg"), panels, top)
     for name in ("curve.svg", "damage.svg", "stages.pvd"):
         ET.parse(os.path.join(out, name))  # raises on malformed XML
-    print(f"member_study: {out}: curve.csv, curve.svg ({len(c)} increments), damage.svg and "
+    print(f"member_figures: {out}: curve.csv, curve.svg ({len(c)} increments), damage.svg and "
           f"{len(run['stages'])} VTU files ({len(run['stages'][0]['points'])} in-plane points each)")
     return run
 
@@ -354,63 +313,9 @@ def check(job):
     results.insert(0, (f"{len(done)} increments converged, {len(rows) - len(done)} attempts cut back; "
                        f"{len(run['curve'])} printed", len(run["curve"]) == len(done) and done))
     for text, ok in results:
-        print(f"member_study: {'ok' if ok else 'FAIL'}: {text}")
+        print(f"member_figures: {'ok' if ok else 'FAIL'}: {text}")
     if not all(ok for _, ok in results):
         sys.exit(1)
-
-
-def time_v(path):
-    """{field: value} of a `/usr/bin/time -v` report."""
-    out = {}
-    with open(path) as f:
-        for line in f:
-            if line.strip().startswith("Elapsed"):
-                out["Elapsed"] = line.rsplit(": ", 1)[1].strip()
-            elif ":" in line:
-                k, v = line.rsplit(":", 1)
-                out[k.strip()] = v.strip()
-    return out
-
-
-def seconds(clock):
-    s = 0.0
-    for part in clock.split(":"):
-        s = 60 * s + float(part)
-    return s
-
-
-def table(specs):
-    print("| run | threads | RVE points | increments (cut back) | ccx iterations | wall time | "
-          "CPU the run got | peak memory | CPU time | RVE CPU time | RVE share | RVE per point and increment |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for spec in specs:
-        label, rest = spec.split("=", 1)
-        job, threads = rest.rsplit(":", 1)
-        tv = time_v(job + ".time")
-        cpu = float(tv["User time (seconds)"]) + float(tv["System time (seconds)"])
-        wall = seconds(tv["Elapsed"])
-        rve, points = 0.0, set()
-        with open(job + ".times.csv") as f:
-            for row in csv.reader(f):
-                rve += float(row[6])
-                points.add((row[4], row[5]))
-        rows = sta(job)
-        done = sum(1 for r in rows if r[3])
-        print(f"| {label} | {threads} | {len(points)} | {done} ({len(rows) - done}) | "
-              f"{sum(r[4] for r in rows)} | {wall:.1f} s | {tv['Percent of CPU this job got']} | "
-              f"{int(tv['Maximum resident set size (kbytes)']) / 1024:.0f} MiB | "
-              f"{cpu:.1f} s | {rve:.1f} s | {100 * rve / cpu:.0f} % | "
-              f"{1e3 * rve / (len(points) * done):.2f} ms |")
-
-
-def compare(a, b):
-    ca, cb = read_dat(a + ".dat")[0], read_dat(b + ".dat")[0]
-    if [p[0] for p in ca] != [p[0] for p in cb]:
-        fail(f"{a} and {b} have different increments")
-    fmax = max(abs(p[2]) for p in ca)
-    worst = max(abs(p[2] - q[2]) for p, q in zip(ca, cb))
-    print(f"largest force difference {worst:.2e} N, {worst / fmax:.1e} of the largest force "
-          f"({fmax:.2f} N), over {len(ca)} increments")
 
 
 def main():
@@ -419,13 +324,6 @@ def main():
         check(sys.argv[2])
     elif len(sys.argv) == 3 and sys.argv[1] == "check":
         check(sys.argv[2])
-    elif len(sys.argv) >= 3 and sys.argv[1] == "table":
-        table(sys.argv[2:])
-    elif len(sys.argv) == 4 and sys.argv[1] == "compare":
-        compare(sys.argv[2], sys.argv[3])
-    elif len(sys.argv) == 4 and sys.argv[1] == "provenance":
-        print(study_provenance.sentence(study_provenance.load(sys.argv[2]), int(sys.argv[3]),
-                                        "ccx runs"))
     else:
         sys.exit(__doc__)
 

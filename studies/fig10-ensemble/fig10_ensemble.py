@@ -1,6 +1,6 @@
 """Fig. 10's peak over many random samples of the paper's RVE.
 
-Usage: python3 scripts/fig10_ensemble.py [--seeds N] [--first S] [--variants LIST]
+Usage: python3 studies/fig10-ensemble/fig10_ensemble.py [--seeds N] [--first S] [--variants LIST]
                                          [--budget SECONDS] [--out CSV]
 
 The paper reads "sigma_x = 4.8 N/mm²" off its one RVE (Fig. 10). Ours (seed 7) has its
@@ -19,7 +19,9 @@ Each variant runs on the same seeds. Stops starting new runs after --budget seco
 wall time (the machine is shared: say how many ran). Writes one CSV row per run
 (variant, seed, limit point, its strain, how the path ended, seconds) and prints the
 spread and the rank of 4.8 per variant, and writes them with the command, the commit and
-the CPU time next to the CSV (fig10_ensemble.md). docs/paper_examples.md reads the CSV.
+the CPU time next to the CSV (fig10_ensemble.md), by default in target/studies/fig10-ensemble/
+(studies/fig10-ensemble/run --docs copies both into docs/paper_examples/, where
+docs/paper_examples.md's report reads the CSV).
 Needs `cargo build --release --bin rve`.
 """
 
@@ -32,8 +34,9 @@ import sys
 import tempfile
 import time
 
-import study_provenance
-import studykit
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from kit import pct, provenance, rve  # noqa: E402
 
 PAPER_PEAK = 4.8
 COARSE = 1.76e-4
@@ -60,8 +63,8 @@ def limit_point(rows):
 def one(variant, seed, work):
     edits = dict(VARIANTS[variant], **{"geometry.seed": seed, "path": LIMIT_PATH})
     name = f"{variant}_{seed}"
-    scene = os.path.join(studykit.ROOT, "scenes", "paper_rve.toml")
-    run = studykit.run_rve(scene, os.path.join(work, name), edits=edits)
+    scene = os.path.join(ROOT, "scenes", "paper_rve.toml")
+    run = rve.run_rve(scene, os.path.join(work, name), edits=edits)
     if not run.rows:
         return {"variant": variant, "seed": seed, "peak": "", "strain": "",
                 "ended": "no increment: " + run.status, "seconds": f"{run.wall:.1f}"}
@@ -91,7 +94,7 @@ def summary(rows):
             f"min {peaks[0]:.3f}, 5 % {q[0]:.3f}, median {statistics.median(peaks):.3f}, "
             f"95 % {q[-1]:.3f}, max {peaks[-1]:.3f}, mean {statistics.fmean(peaks):.3f}, "
             f"sd {statistics.pstdev(peaks):.3f}; {above} of {len(peaks)} reach 4.8 "
-            f"({studykit.pct(above / len(peaks))})")
+            f"({pct(above / len(peaks))})")
     return lines
 
 
@@ -101,11 +104,12 @@ def main():
     ap.add_argument("--first", type=int, default=1)
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--budget", type=float, default=math.inf, help="wall seconds")
-    ap.add_argument("--out", default=os.path.join(studykit.ROOT, "docs", "paper_examples",
+    ap.add_argument("--out", default=os.path.join(ROOT, "target", "studies", "fig10-ensemble",
                                                   "fig10_ensemble.csv"))
     a = ap.parse_args()
     variants = a.variants.split(",")
-    record = study_provenance.start()
+    os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
+    record = provenance.start()
     rows, start, cpu0 = [], time.perf_counter(), os.times()
     with tempfile.TemporaryDirectory() as work:
         for seed in range(a.first, a.first + a.seeds):
@@ -126,8 +130,8 @@ def main():
     md = os.path.splitext(a.out)[0] + ".md"
     with open(md, "w") as f:
         f.write("# Fig. 10's peak over random samples (generated; do not edit)\n\n"
-                + study_provenance.sentence(record, len(rows)) + "\n\n"
-                + f"Command: `python3 scripts/{os.path.basename(__file__)} "
+                + provenance.sentence(record, len(rows)) + "\n\n"
+                + f"Command: `python3 studies/fig10-ensemble/{os.path.basename(__file__)} "
                 + " ".join(sys.argv[1:]) + f"`; {cpu:.0f} s of CPU in the runs. "
                 + f"One row per run in `{os.path.basename(a.out)}`.\n\n"
                 + "\n".join(f"- {line}" for line in lines) + "\n")

@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""The member's accuracy against its cost (scripts/member-accuracy): ccx runs of
+"""The member's accuracy against its cost (studies/member-accuracy/run): ccx runs of
 calculix_examples/member_beam.py's beam at several increment counts and answer-sharing
 tolerances, each scored against a reference run. Standard library only.
 
   member_accuracy.py table FINE LABEL=JOB[@EXACT] ...
 
 FINE is the reference (the finest increments, no sharing). For every run JOB (a ccx job
-path without extension: JOB.inp, JOB.dat, JOB.time from /usr/bin/time -v) one row:
+path without extension: JOB.inp, JOB.dat, JOB.time from the kit's ccx runner) one row:
 
 - increments, wall time and CPU time (and both against the FINE run's);
 - against FINE, along the whole load path (down, back, up), at the run's own increments
@@ -18,35 +18,27 @@ path without extension: JOB.inp, JOB.dat, JOB.time from /usr/bin/time -v) one ro
   - **dissipated work**: W = integral of F dU over the path (trapezoids from the origin)
     less the energy the member gives back on unloading from the last increment. IMPL-EX
     unloads every RVE on its secant through the origin (the paper's eq. 24; checked on the
-    member by member_study.py's `check`: F/U constant within 1 % on the way back), so that
+    member by member_figures.py's `check`: F/U constant within 1 % on the way back), so that
     energy is F_end U_end / 2. The relative difference to FINE's;
 - with `@EXACT` (a run at the same increments without sharing): the curve's L1 and max
   against it, and at the deck's stages (`--stage-stress`) the largest difference of a
   point's stress (max over the in-plane components) in units of the largest stress of
-  the stage, and how many points are damaged (mirror 4 above member_study.DAMAGED) in one
-  run and not in the other.
+  the stage, and how many points are damaged (mirror 4 above member_figures.DAMAGED) in
+  one run and not in the other.
 """
 import os
 import sys
 
-from member_study import DAMAGED, HEADER, fail, read_dat, read_inp, seconds, time_v
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from kit.ccx import dat_points, read_time  # noqa: E402
+from member_figures import DAMAGED, fail, read_dat, read_inp  # noqa: E402
 
 
 def stage_stresses(path):
     """{time: {(element, point): (sxx, syy, sxy)}} of the `*EL PRINT` stresses of set EALL."""
-    out, t, on = {}, None, False
-    with open(path) as f:
-        for line in f:
-            m = HEADER.match(line)
-            if m:
-                on = m.group(1) == "stresses" and m.group(2).upper() == "EALL"
-                t = float(m.group(3))
-                continue
-            tokens = line.split()
-            if on and len(tokens) == 8:
-                sxx, syy, _, sxy = (float(v) for v in tokens[2:6])
-                out.setdefault(t, {})[(int(tokens[0]), int(tokens[1]))] = (sxx, syy, sxy)
-    return out
+    return {t: {k: (v[0], v[1], v[3]) for k, v in points.items()}
+            for t, points in dat_points(path, "stresses", "EALL").items() if points}
 
 
 def load(job):
@@ -55,7 +47,7 @@ def load(job):
         fail(f"{job}: no increment in {job}.dat")
     _, _, stage_incs = read_inp(job + ".inp")
     return {"curve": curve, "stages": stages, "stage_incs": stage_incs,
-            "stresses": stage_stresses(job + ".dat"), "time": time_v(job + ".time")}
+            "stresses": stage_stresses(job + ".dat"), "time": read_time(job)}
 
 
 def dissipated(curve):
@@ -127,7 +119,7 @@ def stage_errors(run, exact):
 
 def cost(run):
     tv = run["time"]
-    return seconds(tv["Elapsed"]), float(tv["User time (seconds)"]) + float(tv["System time (seconds)"])
+    return tv["wall"], tv["user"] + tv["sys"]
 
 
 def table(fine_job, specs):

@@ -1,9 +1,9 @@
-"""Writes docs/paper_examples.md and its SVG plots from the runs of scripts/paper-examples.
+"""Writes paper_examples.md and its SVG plots from the runs of studies/paper-examples/run.
 
-Usage: python3 scripts/paper_examples_report.py WORK OUT.md SVG_DIR
+Usage: python3 studies/paper-examples/paper_examples_report.py WORK OUT.md SVG_DIR
 
 WORK holds one directory per run (response.csv of `rve run`, status: "ok" or the error)
-and provenance.json, the study's start as scripts/study_provenance.py records it.
+and provenance.json, the study's start as scripts/kit/provenance.py records it.
 Standard library only; the plots are plain SVG. The verdicts use the same measures as
 tests/paper_examples.rs, which asserts them, and the same thresholds, read from
 tests/data/paper_verdicts.toml (the one place both read).
@@ -17,15 +17,18 @@ import sys
 
 import tomllib
 
-import study_provenance
-from studykit import COLOURS, ROOT, pct, svg_plot
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from kit import pct  # noqa: E402
+from kit import provenance as study_provenance  # noqa: E402
+from kit.plot import COLOURS, svg_plot  # noqa: E402
 
 WORK, MD, SVG_DIR = sys.argv[1:4]
 SVG_REL = os.path.relpath(SVG_DIR, os.path.dirname(MD))
 FIG10 = 4.8
 with open(os.path.join(ROOT, "tests", "data", "paper_verdicts.toml"), "rb") as _f:
     LIMIT = tomllib.load(_f)
-# Fig. 10's peak over random samples (scripts/fig10_ensemble.py), if it has been run.
+# Fig. 10's peak over random samples (studies/fig10-ensemble), as committed in docs/.
 ENSEMBLE = os.path.join(ROOT, "docs", "paper_examples", "fig10_ensemble.csv")
 
 
@@ -116,7 +119,7 @@ def f0(x):
 
 def plot(fname, title, xlabel, ylabel, series, hlines=(), marks=()):
     """series: (label, xs, ys, dashed). hlines: (y, label). marks: (x, y, label). Drawn by
-    studykit's plotter into SVG_DIR, and linked from the report."""
+    the kit's plotter into SVG_DIR, and linked from the report."""
     svg_plot(
         os.path.join(SVG_DIR, fname), title, xlabel, ylabel,
         [
@@ -341,12 +344,12 @@ def fig10(el, x, px, ex, py_):
             + ", ".join(f"{k} {v:.3f}" for k, v in others.items()) + ").")
     spread = ensemble_spread()
     if spread is None:
-        finding("5.2.1, Fig. 10", FIG10_CLAIM, ours + " (No ensemble: run scripts/fig10_ensemble.py.)",
+        finding("5.2.1, Fig. 10", FIG10_CLAIM, ours + " (No ensemble: run studies/fig10-ensemble/run --docs.)",
                 "no" if px < FIG10 else "yes")
         return
     reach = sum(v["reach"] for v in spread.values())
     total = sum(v["n"] for v in spread.values())
-    ours += (" Over random samples of the same specification (seeds, scripts/fig10_ensemble.py): "
+    ours += (" Over random samples of the same specification (seeds, studies/fig10-ensemble): "
              + "; ".join(f"{k} {v['n']} samples, {v['lo']:.2f}-{v['hi']:.2f} (median "
                          f"{v['median']:.2f}), {v['reach']} reach 4.8"
                          for k, v in spread.items())
@@ -375,7 +378,7 @@ FIG10_CLAIM = ("a close-up of the ITZ cracks is taken at sigma_x = 4.8 N/mm² (s
 
 
 def ensemble_spread():
-    """Per variant of scripts/fig10_ensemble.py: samples, spread, how many reach 4.8."""
+    """Per variant of studies/fig10-ensemble: samples, spread, how many reach 4.8."""
     if not os.path.exists(ENSEMBLE):
         return None
     with open(ENSEMBLE) as f:
@@ -396,7 +399,7 @@ def ensemble_table(spread):
       "`geometry.seed` varied; `plane_strain`: `cell.analysis = \"plane_strain\"`: section 5 "
       "opens with \"a plane deformation condition is assumed in all analysis\", section 5.2 "
       "says plane stress; `zero_margin`: "
-      "`geometry.margin = 0`). Made by `scripts/fig10_ensemble.py`, which also records the "
+      "`geometry.margin = 0`). Made by `studies/fig10-ensemble/run`, which also records the "
       "command, the commit and the CPU time in `docs/paper_examples/fig10_ensemble.md`.", "")
     table(["variant", "seeds", "samples", "min", "median", "mean", "sd", "max", "reach 4.8"],
           [[k, v["seeds"], v["n"], f"{v['lo']:.3f}", f"{v['median']:.3f}", f"{v['mean']:.3f}",
@@ -807,7 +810,7 @@ def main():
         provenance(),
         "",
         "Pituba & Souza Neto (2015), sections 5.1 and 5.2, reproduced with mesorve. Generated "
-        "by `scripts/paper-examples` (do not edit by hand); every verdict below is asserted "
+        "by `studies/paper-examples/run` (do not edit by hand); every verdict below is asserted "
         "by `tests/paper_examples.rs` (`cargo test --release --test paper_examples`); the "
         "closure of Fig. 8 by `tests/closed_form_interface.rs`.",
         "",

@@ -2,17 +2,20 @@
 """The step control (`solver.step_tolerance`, `solver.smallest_step`) in the hosts, against
 uniform refinement: the tension's peak, the force at its end, its work and the mean
 distance of its curve from a uniformly refined reference, with the cost of each run.
-docs/step_control.md quotes its tables.
+docs/step_control.md quotes its tables; studies/step-control/run keeps them in
+target/studies/step-control/.
 
   step_control_study.py localize [--quick]
       c_examples/localize.c (scripts/build-c-examples first) on the plain IMPL-EX scene at
       1x, 8x, 16x and 32x (the reference) its steps, and on the step-control scene with
-      several (tolerance, floor) pairs. Cost: RVE factorizations (a count) and the time in
-      rve_update. --quick: 1x, 8x and the shipped control scene against 16x.
+      several (tolerance, floor) pairs (scene files by kit.rve.write_scene). Cost: RVE
+      factorizations (a count) and the time in rve_update. --quick: 1x, 8x and the shipped
+      control scene against 16x.
 
   step_control_study.py calculix DECK [--reference N]
-      CalculiX (scripts/build-calculix, target/release/librve.so) on a shipped cycle deck
-      (calculix_examples/specimen_weak.inp, specimen_notch.inp): the deck as it is, the
+      CalculiX (the kit's runner: scripts/build-calculix, target/release/librve.so) on a
+      shipped cycle deck (calculix_examples/specimen_weak.inp, specimen_notch.inp): the
+      deck as it is, the
       deck with concrete_implex.toml plus step_tolerance = 0.01 and smallest_step = 1/16
       of the tension's increment, and the deck at 16x and N x (default 64, the reference)
       its increments. Cost: wall time, increments and cut-backs.
@@ -22,18 +25,19 @@ force, the trapezoidal work, and the mean over the reference's points of
 |F_run(U) - F_ref(U)| (the run's curve interpolated linearly) over the reference's peak.
 Runs one at a time; needs python3 only (standard library).
 """
-import os
 import re
 import shutil
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-from calculix_report import curve, phases
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "scripts"))
+from calculix_report import curve, phases  # noqa: E402
+from kit import ccx as kit_ccx  # noqa: E402
+from kit.rve import write_scene  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
 LOCALIZE = ROOT / "target/c_examples/bin/localize"
 PLAIN_SCENE = ROOT / "scenes/paper_rve_host_implex.toml"
 CONTROL_SCENE = ROOT / "scenes/paper_rve_host_step_control.toml"
@@ -86,11 +90,11 @@ def localize(scene, scale=1):
 
 
 def control_scene(directory, tolerance, floor):
-    text = CONTROL_SCENE.read_text()
-    text = re.sub(r"(?m)^step_tolerance = .*$", f"step_tolerance = {tolerance}", text)
-    text = re.sub(r"(?m)^smallest_step = .*$", f"smallest_step = {floor:.6g}", text)
+    """The step-control scene with `solver.step_tolerance` and `solver.smallest_step` set
+    (the floor as 6 significant digits), as a file: localize.c reads a scene file."""
     path = Path(directory) / f"control_{tolerance}_{floor:.3g}.toml"
-    path.write_text(text)
+    write_scene(CONTROL_SCENE, path, {"solver.step_tolerance": float(tolerance),
+                                      "solver.smallest_step": float(f"{floor:.6g}")})
     return path
 
 
@@ -127,39 +131,38 @@ def scaled_deck(text, scale):
     return re.sub(r"(?m)^\*STEP, INC=\d+", "*STEP, INC=100000", text)
 
 
-def ccx_run(directory, job, deck, scene_text, ccx):
-    """(tension curve, increments, cut-backs, wall seconds, finished) of one ccx run."""
+def ccx_run(directory, job, deck, scene_edits, ccx):
+    """(tension curve, increments, cut-backs, wall seconds, finished) of one ccx run, in its
+    own folder with concrete_implex.toml (with `scene_edits`) and the library staged."""
     d = Path(directory) / job
     d.mkdir()
     (d / f"{job}.inp").write_text(deck)
-    (d / "concrete_implex.toml").write_text(scene_text)
-    shutil.copy(ROOT / "target/release/librve.so", d / "libRVE.so")
-    env = dict(os.environ, LD_LIBRARY_PATH=str(d), MESORVE_SCENE_PATH=str(d),
-               OMP_NUM_THREADS="1", CCX_NPROC_RESULTS="2")
-    start = time.monotonic()
-    log = subprocess.run([ccx, job], cwd=d, env=env, capture_output=True, text=True).stdout
-    seconds = time.monotonic() - start
+    scene = ROOT / "calculix_examples/concrete_implex.toml"
+    if scene_edits:
+        write_scene(scene, d / "concrete_implex.toml", scene_edits)
+    else:
+        shutil.copy(scene, d / "concrete_implex.toml")
+    kit_ccx.stage(str(d))
+    run = kit_ccx.run(job, str(d), ccx, scenes=str(d), threads=1,
+                      env={"CCX_NPROC_RESULTS": "2"}, check=False)
     tension = phases(curve(str(d / job)))[0]
     u, f = [0.0] + [p[1] for p in tension], [0.0] + [p[2] for p in tension]
     increments = len(curve(str(d / job)))
-    cuts = log.count("increment size decrease requested by a material user routine")
-    return (u, f), increments, cuts, seconds, "Job finished" in log
+    cuts = run.log().count("increment size decrease requested by a material user routine")
+    return (u, f), increments, cuts, run.wall, run.finished
 
 
 def calculix_study(deck_path, reference_scale):
-    ccx = subprocess.run([str(ROOT / "scripts/build-calculix")], capture_output=True,
-                         text=True, check=True).stdout.strip()
+    ccx = kit_ccx.binary()
     deck = Path(deck_path).read_text()
-    scene = (ROOT / "calculix_examples/concrete_implex.toml").read_text()
     first = float(re.search(r"(?m)^\*STATIC\n([0-9.e-]+),", deck).group(1))
-    controlled = scene.replace('integration = "implex"\n', 'integration = "implex"\n'
-                               f"step_tolerance = 0.01\nsmallest_step = {first / 16:.6g}\n", 1)
+    controlled = {"solver.step_tolerance": 0.01, "solver.smallest_step": float(f"{first / 16:.6g}")}
     with tempfile.TemporaryDirectory() as tmp:
-        runs = [("the deck's increments", "plain", deck, scene),
+        runs = [("the deck's increments", "plain", deck, None),
                 ("step_tolerance 0.01, floor 1/16", "control", deck, controlled),
-                ("16x the increments", "fine16", scaled_deck(deck, 16), scene)]
+                ("16x the increments", "fine16", scaled_deck(deck, 16), None)]
         results = [(label, ccx_run(tmp, job, d, s, ccx)) for label, job, d, s in runs]
-        reference = ccx_run(tmp, "reference", scaled_deck(deck, reference_scale), scene, ccx)
+        reference = ccx_run(tmp, "reference", scaled_deck(deck, reference_scale), None, ccx)
     plain_seconds = results[0][1][3]
     print(f"{Path(deck_path).name}, tension against {reference_scale}x its increments "
           f"(peak {max(reference[0][1]):.2f} N, {reference[3]:.0f} s)\n")
