@@ -24,7 +24,7 @@ had another DTIME would extrapolate further or less at its first increment.
 Stages: the increments K (default: down / 3, down, and the last) at which ccx prints every
 point's state variables (*EL PRINT SDV, with the points' coordinates, COORD) to the
 .dat: the beam before the peak, at the largest load of the downward branch and after the
-reversal (scripts/member_study.py colours the member by the damage mirror). Each stage
+reversal (scripts/member_figures.py colours the member by the damage mirror). Each stage
 increment is a step of its own (ccx prints a step's every increment); the other steps
 print the stresses of the two bottom elements at mid-span (element set EMID), which also
 cancels the previous step's SDV request. Splitting the path into steps changes nothing
@@ -32,7 +32,7 @@ else: the prescribed displacement is ramped linearly within each step from where
 one ended, and every increment has the same displacement and time increment.
 `--stages none` prints no stage (ccx prints a stage's 795 values per point serially: on the
 5 mm beam about 6 s a stage, docs/structure.md). `--stage-stress` prints every point's stresses at the stages too (*EL PRINT S: the per-point
-comparison of scripts/member_accuracy.py).
+comparison of studies/member-accuracy/member_accuracy.py).
 """
 import argparse
 

@@ -48,7 +48,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
-from calculix_report import dat_blocks  # noqa: E402
+from kit.ccx import dat_blocks  # noqa: E402
 
 COLUMN = (6, 18, 30)  # statev_decks.py's COLUMN
 SAME = 1e-12

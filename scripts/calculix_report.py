@@ -76,8 +76,9 @@
       SNAP_RATIO of its size), `close` (it finished within SNAP_TOLERANCE of the
       reference's end), `-` none. Exit status 1 when a check fails, with the reasons.
 """
-import re
 import sys
+
+from kit.ccx import cvg, dat_blocks, sta
 
 TOLERANCE = 1e-6
 DROP = 0.01
@@ -99,22 +100,6 @@ SNAP_TOLERANCE = 0.01
 # The step ratio the step check asks for (PNEWDT), by which ccx cuts an automatic increment.
 SNAP_RATIO = 0.5
 PNEWDT_CUT = "increment size decrease requested by a material user routine (through pnewdt)"
-
-
-def dat_blocks(path, kind, nset=None):
-    """{time: [[values per line]]} of the blocks `kind` ('stresses', 'forces', ...), of
-    the set `nset` only when given."""
-    blocks, current = {}, None
-    with open(path) as f:
-        for line in f:
-            m = re.match(r"\s*(?:total )?(\w+) \(.*\) for set (\w+) and time\s+(\S+)", line)
-            if m:
-                wanted = m.group(1) == kind and (nset is None or m.group(2) == nset.upper())
-                current = blocks.setdefault(float(m.group(3)), []) if wanted else None
-                continue
-            if current is not None and line.strip():
-                current.append([float(v) for v in line.split()])
-    return blocks
 
 
 def homogeneous(dat, csv):
@@ -145,29 +130,6 @@ def homogeneous(dat, csv):
           f"increment {where}; tolerance {TOLERANCE:.0e}")
     if worst > TOLERANCE:
         sys.exit(1)
-
-
-def sta(job):
-    """[(step, inc, attempt, converged, iterations, increment size)] from JOB.sta."""
-    out = []
-    with open(job + ".sta") as f:
-        for line in f:
-            m = re.match(r"\s*(\d+)\s+(\d+)\s+(\d+)(U?)\s+(\d+)\s+\S+\s+\S+\s+(\S+)", line)
-            if m:
-                out.append((int(m.group(1)), int(m.group(2)), int(m.group(3)),
-                            m.group(4) != "U", int(m.group(5)), float(m.group(6))))
-    return out
-
-
-def cvg(job):
-    """{(step, inc, attempt): [force residual % per iteration]} from JOB.cvg."""
-    out = {}
-    with open(job + ".cvg") as f:
-        for line in f:
-            v = line.split()
-            if len(v) == 9 and v[0].isdigit():
-                out.setdefault((int(v[0]), int(v[1]), int(v[2])), []).append(float(v[5]))
-    return out
 
 
 def curve(job):

@@ -11,10 +11,11 @@ Usage: check_umat_vtk.py VTK_DIR JOB.dat NOEL.NPT [NOEL.NPT ...]
 (standard library only; prints one line per point, exits 1 on a failure)
 """
 
-import re
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
+
+from kit.ccx import dat_points
 
 TOLERANCE = 1e-5
 
@@ -25,16 +26,7 @@ def fail(msg):
 
 def dat_stresses(path):
     """{time: {(elem, ip): [sxx, syy, szz, sxy, ...]}} of the .dat's stress blocks."""
-    blocks, current = {}, None
-    for line in open(path):
-        m = re.match(r"\s*(?:total )?(\w+) \(.*\) for set \w+ and time\s+(\S+)", line)
-        if m:
-            current = blocks.setdefault(float(m.group(2)), {}) if m.group(1) == "stresses" else None
-            continue
-        if current is not None and line.strip():
-            v = line.split()
-            current[(int(v[0]), int(v[1]))] = [float(x) for x in v[2:]]
-    return blocks
+    return dat_points(path, "stresses")
 
 
 def read_vtu(path):

@@ -14,18 +14,16 @@ build the earlier commit in a worktree (`git worktree add ../before COMMIT`, `ca
 import csv
 import glob
 import os
-import subprocess
 import sys
 import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from kit.rve import ROOT, run_rve
 
 
 def response(rve, scene, out):
-    """(exit code, rows without `seconds`) of `rve run SCENE --out OUT`."""
+    """(exit code, rows without `seconds`, as text) of `rve run SCENE --out OUT`."""
     os.makedirs(out, exist_ok=True)
-    p = subprocess.run([rve, "run", scene, "--out", out, "--quiet"], capture_output=True,
-                       text=True, cwd=ROOT)
+    p = run_rve(scene, out, rve, cwd=ROOT)
     path = os.path.join(out, "response.csv")
     if not os.path.exists(path):
         lines = p.stderr.strip().splitlines()

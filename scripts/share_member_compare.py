@@ -1,38 +1,24 @@
-"""Compares two ccx runs of the member (scripts/share-member): exact and with answer
-sharing. Prints the wall times, the load-deflection L1 difference (the mean over the
-increments of |F_shared - F_exact|, over the largest |F_exact|) and the largest, the
-largest per-point stress difference at the printed stages over the largest stress, and
-per stage the in-plane points damaged (mirror 4 above 0.01) in one run and not the
-other, with the largest damage difference. Usage: share_member_compare.py [--check]
-EXACT SHARED (the job paths without .dat). The library's sharing log (MESORVE_SHARE_LOG) and
-the run's wall time are read from time.txt beside each job (/usr/bin/time -v's output and
-the run's stderr, scripts/share-member) or stderr.txt (scripts/test-member: no wall time).
---check exits 1 unless the shared run meets issue 38's targets against the exact one: no
-call shared is a failure too."""
+"""Compares two ccx runs of the member (scripts/test-member, studies/share-member): exact and
+with answer sharing. Prints the wall times, the load-deflection L1 difference (the mean over
+the increments of |F_shared - F_exact|, over the largest |F_exact|) and the largest, the
+largest per-point stress difference at the printed stages over the largest stress, and per
+stage the in-plane points damaged (mirror 4 above 0.01) in one run and not the other, with
+the largest damage difference. Usage: share_member_compare.py [--check] EXACT SHARED (the
+job paths without .dat), both run by the kit's ccx runner: the library's sharing log
+(MESORVE_SHARE_LOG, on stderr) is read from JOB.log, the wall time from JOB.time. --check
+exits 1 unless the shared run meets issue 38's targets against the exact one: no call shared
+is a failure too."""
+import os
 import re
 import sys
-from pathlib import Path
 
-import member_study
-
-STRESS = re.compile(r"\s*stresses \(.*\) for set EALL and time\s+(\S+)")
+from kit.ccx import dat_points, read_time
+from member_figures import read_dat
 
 
 def stresses(path):
-    out, t = {}, None
-    for line in open(path):
-        m = STRESS.match(line)
-        if m:
-            t = float(m.group(1))
-            out[t] = {}
-            continue
-        if member_study.HEADER.match(line):
-            t = None
-            continue
-        tok = line.split()
-        if t is not None and len(tok) == 8:
-            out[t][(int(tok[0]), int(tok[1]))] = [float(v) for v in tok[2:]]
-    return out
+    """{time: {(element, point): [sxx, syy, szz, sxy, sxz, syz]}} of set EALL."""
+    return dat_points(path, "stresses", "EALL")
 
 
 # The targets --check holds (issue 38, for share_tolerance up to 0.01 on the member): the
@@ -41,26 +27,20 @@ def stresses(path):
 CURVE_L1, POINT_STRESS = 0.005, 0.02
 
 
-def stderr_text(job):
-    folder = Path(job).parent
-    found = [folder / n for n in ("time.txt", "stderr.txt") if (folder / n).exists()]
-    return found[0].read_text() if found else ""
-
-
 def wall(job):
-    m = re.search(r"Elapsed \(wall clock\) time.*: (\S+)", stderr_text(job))
-    return member_study.seconds(m.group(1)) if m else None
+    return read_time(job)["wall"] if os.path.exists(job + ".time") else None
 
 
 def shared_counts(job):
-    log = stderr_text(job)
+    with open(job + ".log", errors="replace") as f:
+        log = f.read()
     pairs = [(int(a), int(b)) for a, b in re.findall(r"(\d+) calls solved, (\d+) shared", log)]
     return sum(a for a, _ in pairs), sum(b for _, b in pairs), len(pairs)
 
 
 def main(exact, shared, check):
-    ce, se = member_study.read_dat(exact + ".dat")
-    cs, ss = member_study.read_dat(shared + ".dat")
+    ce, se = read_dat(exact + ".dat")
+    cs, ss = read_dat(shared + ".dat")
     if [p[0] for p in ce] != [p[0] for p in cs]:
         sys.exit("the runs have different increments")
     fmax = max(abs(p[2]) for p in ce)
