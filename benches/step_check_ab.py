@@ -12,7 +12,7 @@ increments flagged (`step_too_large`), and the median over the repeats of the so
 own time (the sum of the `seconds` column) and of the mean update; then NEW / BASE.
 
 The paths: the fine RVE's §5.2.1 path (scenes/paper_rve_fine.toml, 20 increments) and
-three of scripts/robustness-study's (the circles and the ellipses in tension along x at 16
+three of studies/robustness/run's (the circles and the ellipses in tension along x at 16
 increments, the §5.2.2 cycle at 60), the paper's contact law. Standard library only.
 """
 

@@ -17,7 +17,7 @@
  *
  * Usage: soak [-t N] [-m M] [-k K] [-r R] [-s SEED] [-f] [SCENE.toml]
  * Defaults (the short version run by scripts/test-c): N = 2, M = 6, K = 30, R = 1,
- * seed 1, scenes/paper_rve_host.toml. scripts/soak runs the long version.
+ * seed 1, scenes/paper_rve_host.toml. studies/soak/run runs the long version.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>

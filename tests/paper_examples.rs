@@ -3,7 +3,7 @@
 //!
 //! Each test states the paper's claim, measures the library's number and asserts what is
 //! true. Where the library disagrees with the paper the test asserts the library's
-//! behaviour and says so; `docs/paper_examples.md` (made by `scripts/paper-examples`) has
+//! behaviour and says so; `docs/paper_examples.md` (made by `studies/paper-examples/run`) has
 //! the tables, the plots and the same verdicts. Run with `--nocapture` to see the numbers.
 //!
 //! Scenes: the shipped `scenes/paper_rve*.toml` and the variants in `scenes/paper/`; the
@@ -124,7 +124,7 @@ fn run(rel: &str, replacements: &[(&str, &str)]) -> Vec<Point> {
 }
 
 /// A threshold of `tests/data/paper_verdicts.toml` ("fig7.elastic_secant_above"): the one
-/// place that `scripts/paper_examples_report.py` reads too, so the document's verdicts and
+/// place that `studies/paper-examples/paper_examples_report.py` reads too, so the document's verdicts and
 /// these assertions cannot drift apart.
 fn limit(key: &str) -> f64 {
     static T: OnceLock<toml::Table> = OnceLock::new();
@@ -320,7 +320,7 @@ fn section_5_1_sigma_c_and_loading_cases() {
 /// Our RVE (seed 7) does not reach 4.8 N/mm²: its limit point under eps_xx is 4.53 N/mm²
 /// (5.6 % below), and no variant of it reaches 4.8. The paper's RVE is another random
 /// sample, so the question is where 4.8 falls among samples of the same specification:
-/// `scripts/fig10_ensemble.py` runs this limit-point path on many seeds (and the
+/// `studies/fig10-ensemble/fig10_ensemble.py` runs this limit-point path on many seeds (and the
 /// plane-strain and zero-margin variants), and docs/paper_examples.md scores the finding
 /// on that spread. This test asserts seed 7's side of it.
 #[test]
@@ -336,7 +336,7 @@ fn fig_10_peak_is_of_the_order_of_4_8() {
         "the peak reaches 4.8: update the docs"
     );
     // Same order. (Where 4.8 falls among random samples of this RVE's specification:
-    // scripts/fig10_ensemble.py, docs/paper_examples.md.)
+    // studies/fig10-ensemble/fig10_ensemble.py, docs/paper_examples.md.)
     assert!(
         peak.stress > limit("fig10.same_order_fraction") * FIG_10_SIGMA_X,
         "peak {:.3}",

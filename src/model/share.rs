@@ -11,9 +11,7 @@
 //! twins, the same to round-off). So the difference from the point's exact run is that of
 //! one increment's answer, bounded by the indicator below, and does not build up over the
 //! increments: a follower whose path departs from its neighbours' solves itself again,
-//! from its own state. (Until 0.3 a follower took the anchor's trial history when the
-//! anchor's growth stayed under `tol`: over many fine increments it ratcheted up to the
-//! anchor's, and the error grew to many times `tol`.)
+//! from its own state.
 //!
 //! **Implicit integration: answer sharing.** With `tol` = `share_tolerance`, a point
 //! (committed state `C`, strain `eps`) matches an anchor (`C_a`, `eps_a`) of the same model
