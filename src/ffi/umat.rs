@@ -1,188 +1,40 @@
 //! The Abaqus UMAT entry point: `rve_umat`, and the same function under the names hosts
 //! look up, `umat_` (gfortran's name for `CALL UMAT(...)`; MOOSE, OpenSees) and `UMAT`
 //! (CalculiX, which upper-cases the function name of `@ABAQUS_<LIB>_<FUNC>`). Only
-//! pointer translation here; the logic is `crate::host::umat`.
+//! pointer translation here: each argument read into a value or a slice (`None` for a
+//! NULL pointer), the arrays at the lengths `crate::host::umat::answer_host` asks for;
+//! which arguments are read, and every rule of the call, are there.
 
-use std::borrow::Cow;
 use std::ffi::{c_char, c_int};
-use std::fmt::Write;
 
-use super::guard::{guard, slice, slice_mut, Failure, FfiResult};
+use super::guard::{guard, Failure};
 use super::status::RveStatus;
-use crate::host::diagnostics::{failure_once, note_once, Note};
-use crate::host::umat::{
-    global, request_step_ratio, umat_scene, HostSignal, UmatCall, UmatOutputs, FAILURE_STEP_RATIO,
-};
-use crate::host::Hypothesis;
+use crate::host::umat::{answer_host, HostArrays, HostCall, HostError, HostLengths, HostScalars};
 
-/// CMNAME is `CHARACTER*80` in Abaqus: no more is read.
-const CMNAME_MAX: usize = 80;
-
-/// A host's bytes as text that is safe to print: up to the first NUL, printable ASCII
-/// kept, any other byte as `\xNN`. Borrowed when every byte is printable (a host's usual
-/// `CMNAME`): the UMAT reads it at every call, so it allocates only for a name to escape.
-fn printable(bytes: &[u8]) -> Cow<'_, str> {
-    let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
-    let bytes = &bytes[..end];
-    let is_printable = |b: &u8| (b' '..=b'~').contains(b);
-    if bytes.iter().all(is_printable) {
-        if let Ok(text) = std::str::from_utf8(bytes) {
-            return Cow::Borrowed(text);
-        }
-    }
-    let mut text = String::with_capacity(4 * bytes.len());
-    for &b in bytes {
-        if is_printable(&b) {
-            text.push(char::from(b));
-        } else {
-            // Writing into a String cannot fail.
-            let _ = write!(text, "\\x{b:02x}");
-        }
-    }
-    Cow::Owned(text)
-}
-
-/// Fills `STRESS(1:NTENS)` with NaN after a failure before the table saw the call, for a
-/// host without `PNEWDT` ([`HostSignal::NanStress`]); nothing when `NTENS` or `STRESS`
-/// cannot be read.
+/// `n` values at `p`; `None` when `p` is NULL.
 ///
 /// # Safety
-/// As [`rve_umat`]'s.
-unsafe fn nan_stress(stress: *mut f64, ntens: *const c_int) {
-    let Some(&n) = ntens.as_ref() else { return };
-    if let (Ok(n @ 1..=6), false) = (usize::try_from(n), stress.is_null()) {
-        std::slice::from_raw_parts_mut(stress, n).fill(f64::NAN);
-    }
+/// A non-NULL `p` must point to `n` values readable for `'a`.
+unsafe fn read<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    (!p.is_null()).then(|| std::slice::from_raw_parts(p, n))
 }
 
-/// The arguments of a UMAT call that the RVE reads or writes, as the host passed them.
-struct Args {
-    stress: *mut f64,
-    statev: *mut f64,
-    ddsdde: *mut f64,
-    stran: *const f64,
-    dstran: *const f64,
-    time: *const f64,
-    dtime: *const f64,
-    cmname: *const c_char,
-    cmname_len: usize,
-    ndi: *const c_int,
-    nshr: *const c_int,
-    ntens: *const c_int,
-    nstatv: *const c_int,
-    props: *const f64,
-    nprops: *const c_int,
-    pnewdt: *mut f64,
-    noel: *const c_int,
-    npt: *const c_int,
-    kstep: *const c_int,
-    kinc: *const c_int,
+/// `n` writable values at `p`; `None` when `p` is NULL.
+///
+/// # Safety
+/// A non-NULL `p` must point to `n` values writable for `'a` and not aliased.
+unsafe fn write<'a>(p: *mut f64, n: usize) -> Option<&'a mut [f64]> {
+    (!p.is_null()).then(|| std::slice::from_raw_parts_mut(p, n))
 }
 
-impl Args {
-    /// The material name: `MESORVE_UMAT_SCENE` when set; else none (the embedded paper
-    /// RVE, said once) for a host without `PNEWDT`, whose `CMNAME` has no length to trust
-    /// (Kratos passes one uninitialised byte and no hidden length); else `CMNAME`, up to
-    /// [`CMNAME_MAX`] bytes, with bytes outside printable ASCII escaped.
-    ///
-    /// # Safety
-    /// As [`rve_umat`]'s.
-    unsafe fn material_name(&self, signal: HostSignal) -> FfiResult<Cow<'_, str>> {
-        if let Some(scene) = umat_scene() {
-            return Ok(Cow::Borrowed(&scene.name));
+impl From<HostError> for Failure {
+    fn from(e: HostError) -> Self {
+        match e {
+            HostError::Null(name) => Failure::null(name),
+            HostError::Refused(error) => error.into(),
+            HostError::Failed(f) => Failure::new(RveStatus::from(&*f.error), f.to_string()),
+            HostError::Panic(message) => Failure::new(RveStatus::Panic, message),
         }
-        if signal == HostSignal::NanStress {
-            note_once(Note::NoScene, || {
-                "mesorve UMAT: a host without PNEWDT and no MESORVE_UMAT_SCENE: CMNAME is not \
-                 read, every point is the embedded paper RVE (printed once)"
-                    .to_string()
-            });
-            return Ok(Cow::Borrowed(""));
-        }
-        let name_len = (self.cmname_len as u32 as usize).min(CMNAME_MAX);
-        let bytes = slice(self.cmname.cast::<u8>(), name_len, "CMNAME")?;
-        Ok(printable(bytes))
-    }
-
-    /// Checks and translates the arguments and calls the table; a failure the table saw
-    /// is printed (once per reason) and sets `reported`.
-    ///
-    /// # Safety
-    /// As [`rve_umat`]'s.
-    unsafe fn call(&self, reported: &mut bool) -> FfiResult {
-        let int = |p: *const c_int, name: &str| -> FfiResult<i32> {
-            p.as_ref().copied().ok_or_else(|| Failure::null(name))
-        };
-        let real = |p: *const f64, name: &str| -> FfiResult<f64> {
-            p.as_ref().copied().ok_or_else(|| Failure::null(name))
-        };
-        let hypothesis = Hypothesis::from_abaqus(
-            int(self.ndi, "NDI")?,
-            int(self.nshr, "NSHR")?,
-            int(self.ntens, "NTENS")?,
-        )?;
-        let n = hypothesis.ntens();
-        let count = |p: *const c_int, name: &str| -> FfiResult<usize> {
-            Ok(usize::try_from(int(p, name)?).unwrap_or(0))
-        };
-        let (nstatv, nprops) = (count(self.nstatv, "NSTATV")?, count(self.nprops, "NPROPS")?);
-        let signal = if self.pnewdt.is_null() {
-            HostSignal::NanStress
-        } else {
-            HostSignal::Pnewdt
-        };
-        let name = self.material_name(signal)?;
-        let time = match signal {
-            HostSignal::Pnewdt => {
-                let t = slice(self.time, 2, "TIME")?;
-                [t[0], t[1]]
-            }
-            // One value: TIME(2) is not read (HostSignal::NanStress).
-            HostSignal::NanStress => [real(self.time, "TIME")?; 2],
-        };
-        let mut no_pnewdt = 0.0;
-        let pnewdt = self.pnewdt.as_mut().unwrap_or(&mut no_pnewdt);
-        let call = UmatCall {
-            cmname: &name,
-            props: if nprops == 0 {
-                &[]
-            } else {
-                slice(self.props, nprops, "PROPS")?
-            },
-            hypothesis,
-            stran: slice(self.stran, n, "STRAN")?,
-            dstran: slice(self.dstran, n, "DSTRAN")?,
-            time: [time[0], time[1]],
-            dtime: real(self.dtime, "DTIME")?,
-            noel: int(self.noel, "NOEL")?,
-            npt: int(self.npt, "NPT")?,
-            kstep: int(self.kstep, "KSTEP")?,
-            kinc: int(self.kinc, "KINC")?,
-        };
-        let mut outputs = UmatOutputs {
-            stress: slice_mut(self.stress, n, "STRESS")?,
-            ddsdde: slice_mut(self.ddsdde, n * n, "DDSDDE")?,
-            statev: if nstatv == 0 {
-                &mut []
-            } else {
-                slice_mut(self.statev, nstatv, "STATEV")?
-            },
-            pnewdt,
-        };
-        global()
-            .call_as(&call, &mut outputs, signal)
-            .map(|_| ())
-            .map_err(|f| {
-                *reported = true;
-                if f.first_report {
-                    failure_once(&f.error.to_string(), &format!("mesorve UMAT: {f}"));
-                }
-                Failure {
-                    status: RveStatus::from(&*f.error),
-                    message: f.to_string(),
-                    step_ratio: Some(f.pnewdt),
-                }
-            })
     }
 }
 
@@ -285,54 +137,35 @@ pub unsafe extern "C" fn rve_umat(
         sse, spd, scd, rpl, ddsddt, drplde, drpldt, temp, dtemp, predef, dpred,
     );
     let _unused = (coords, drot, celent, dfgrd0, dfgrd1, layer, kspt);
-    let args = Args {
-        stress,
-        statev,
-        ddsdde,
-        stran,
-        dstran,
-        time,
-        dtime,
-        cmname,
-        cmname_len,
-        ndi,
-        nshr,
-        ntens,
-        nstatv,
-        props,
-        nprops,
-        pnewdt,
-        noel,
-        npt,
-        kstep,
-        kinc,
+    let int = |p: *const c_int| p.as_ref().copied();
+    let scalars = HostScalars {
+        ndi: int(ndi),
+        nshr: int(nshr),
+        ntens: int(ntens),
+        nstatv: int(nstatv),
+        nprops: int(nprops),
+        noel: int(noel),
+        npt: int(npt),
+        kstep: int(kstep),
+        kinc: int(kinc),
+        dtime: dtime.as_ref().copied(),
+        // The low 32 bits: gfortran passes a `size_t`, CalculiX's C caller an `int`.
+        cmname_len: cmname_len as u32 as usize,
     };
-    let mut reported = false;
-    let status = guard("rve_umat", || args.call(&mut reported));
-    if status != RveStatus::Ok && !reported {
-        // Failed before the table saw the call (bad NTENS, a NULL argument, a panic).
-        let message = super::last_error_message();
-        failure_once(&message, &format!("mesorve UMAT: {message}"));
-        match pnewdt.as_mut() {
-            Some(p) => request_step_ratio(p, FAILURE_STEP_RATIO),
-            None => nan_stress(stress, ntens),
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A host's bytes print as printable ASCII, up to the first NUL.
-    #[test]
-    fn host_bytes_are_escaped() {
-        assert_eq!(printable(b"CONCRETE  "), "CONCRETE  ");
-        assert!(matches!(printable(b"CONCRETE  "), Cow::Borrowed(_)));
-        assert_eq!(printable(b"A\x9c\n\x1b[2J"), "A\\x9c\\x0a\\x1b[2J");
-        assert_eq!(printable(b"AB\0garbage\xff"), "AB");
-        assert!(printable(&[0x80, 0xfe, 0x07])
-            .chars()
-            .all(|c| c.is_ascii_graphic()));
-    }
+    let arrays = move |n: HostLengths| HostArrays {
+        cmname: n.cmname.and_then(|len| read(cmname.cast::<u8>(), len)),
+        time: read(time, n.time),
+        props: read(props, n.props),
+        stran: read(stran, n.strain),
+        dstran: read(dstran, n.strain),
+        stress: write(stress, n.stress),
+        ddsdde: write(ddsdde, n.ddsdde),
+        statev: write(statev, n.statev),
+    };
+    let call = HostCall {
+        scalars,
+        pnewdt: pnewdt.as_mut(),
+        arrays,
+    };
+    guard("rve_umat", || answer_host(call).map_err(Failure::from));
 }

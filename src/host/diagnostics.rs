@@ -36,6 +36,10 @@ pub enum Note {
     Unverified,
     /// `NSTATV` too small for `STATEV` mode: the state stays in the library's table.
     TableMode,
+    /// `MESORVE_UMAT_VTK`: a file could not be written.
+    VtkWrite,
+    /// `MESORVE_UMAT_VTK`: an IMPL-EX answer without a fluctuation got no file.
+    VtkSkipped,
 }
 
 /// The [`Note`]s said so far, one bit each.
@@ -50,8 +54,8 @@ pub const SAID_ONCE: &str =
     "(printed once per process for this reason; rve_last_error has each call's message)";
 
 /// Writes `line` on stderr; a write error is ignored (stderr closed: nothing to tell).
-/// The one writer of the library's messages (`MESORVE_UMAT_VTK`'s notes, said once per
-/// table, use it directly).
+/// The one writer of the library's messages (a message said once per process by its
+/// nature, such as a bad `MESORVE_UMAT_VTK` read at the first call, uses it directly).
 pub(crate) fn say(line: &str) {
     let _ = writeln!(std::io::stderr(), "{line}");
 }

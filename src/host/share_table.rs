@@ -132,7 +132,7 @@ impl Increment {
             .iter()
             .find(|s| {
                 s.ratio == ratio
-                    && s.committed.closed == core.closed
+                    && *s.committed.closed == *core.closed
                     && s.committed.at_start == core.at_start
                     && s.committed.step.to_bits() == core.step.to_bits()
                     && signature.close(&s.signature, tol, self.secant_scale)

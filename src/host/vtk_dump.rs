@@ -47,9 +47,9 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Mutex, Once, PoisonError};
+use std::sync::{Mutex, PoisonError};
 
-use super::diagnostics::say;
+use super::diagnostics::{note_once, say, Note};
 use crate::error::Error;
 use crate::model::Instance;
 use mesorve_core::solver::Integration;
@@ -127,9 +127,7 @@ pub struct VtkDump {
     series: Mutex<HashMap<(i32, i32), Series>>,
     written: AtomicU64,
     failures: AtomicU64,
-    failure_note: Once,
     skipped: AtomicU64,
-    skipped_note: Once,
 }
 
 impl VtkDump {
@@ -144,9 +142,7 @@ impl VtkDump {
             series: Mutex::new(HashMap::new()),
             written: AtomicU64::new(0),
             failures: AtomicU64::new(0),
-            failure_note: Once::new(),
             skipped: AtomicU64::new(0),
-            skipped_note: Once::new(),
         })
     }
 
@@ -217,12 +213,12 @@ impl VtkDump {
         }
         if let Err(e) = self.write(instance, c) {
             self.failures.fetch_add(1, Ordering::Relaxed);
-            self.failure_note.call_once(|| {
-                say(&format!(
+            note_once(Note::VtkWrite, || {
+                format!(
                     "mesorve: {UMAT_VTK_VAR}: element {}, point {}: cannot write the RVE \
                      fields: {e}; the analysis goes on (printed once)",
                     c.noel, c.npt
-                ))
+                )
             });
         }
     }
@@ -231,14 +227,14 @@ impl VtkDump {
     /// closed cracks) holds no fluctuation to write: counted, said once.
     fn skip(&self, c: &DumpAt) {
         self.skipped.fetch_add(1, Ordering::Relaxed);
-        self.skipped_note.call_once(|| {
-            say(&format!(
+        note_once(Note::VtkSkipped, || {
+            format!(
                 "mesorve: {UMAT_VTK_VAR}: element {}, point {}: with IMPL-EX an increment \
                  answered by reusing its step's factorization (unloading, closed cracks: \
                  solver.fast_path) has no RVE fluctuation to write; such increments get no \
                  file (printed once)",
                 c.noel, c.npt
-            ))
+            )
         });
     }
 

@@ -2,6 +2,8 @@
 //! the RVE state in its own state variables stores, and the full state the solver starts
 //! from, rebuilt from it alone.
 
+use std::borrow::Cow;
+
 use super::rve_model::Model;
 use crate::error::{Error, Result};
 use mesorve_core::solver::{implex, ContactStatus, Integration, Workspace};
@@ -39,6 +41,32 @@ impl Model {
     /// no copy of the histories).
     pub fn core_view_of<'a>(&self, state: &'a State) -> CoreView<'a> {
         let points = self.disc.interface_points();
+        let words = held_contact_words(points);
+        let implex = self.solver.integration == Integration::Implex;
+        let own = &state.implex.closed;
+        // IMPL-EX's status in the core's layout (every word, no bit past the last point):
+        // borrowed, so that writing a state's values allocates nothing.
+        let spare = |w: &u64| points % 64 != 0 && w >> (points % 64) != 0;
+        let closed = if implex && own.len() == words && !own.last().is_some_and(spare) {
+            Cow::Borrowed(own.as_slice())
+        } else {
+            Cow::Owned(self.closed_words(state))
+        };
+        CoreView {
+            strain: state.strain,
+            history: &state.history,
+            closed,
+            previous: &state.implex.previous,
+            step: state.implex.step,
+            at_start: state.implex.at_start,
+            time: None,
+        }
+    }
+
+    /// The contact status of `state` in the core's layout (see
+    /// [`core_view_of`](Self::core_view_of)).
+    fn closed_words(&self, state: &State) -> Vec<u64> {
+        let points = self.disc.interface_points();
         let mut closed = vec![0u64; held_contact_words(points)];
         let mut set = |q: usize| closed[q / 64] |= 1 << (q % 64);
         if self.solver.integration == Integration::Implex {
@@ -60,15 +88,7 @@ impl Model {
                 .filter(|&q| gaps[q] ^ state.is_held(q))
                 .for_each(set);
         }
-        CoreView {
-            strain: state.strain,
-            history: &state.history,
-            closed,
-            previous: &state.implex.previous,
-            step: state.implex.step,
-            at_start: state.implex.at_start,
-            time: None,
-        }
+        closed
     }
 
     /// The full state a committed `core` stands for (`None`: the virgin state), a function

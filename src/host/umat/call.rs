@@ -1,13 +1,16 @@
 //! The arguments and results of one UMAT call: what the host passes ([`UmatCall`]), what
 //! it gets back ([`UmatOutputs`], [`Outcome`], [`UmatFailure`]) and how it hears of a
 //! failure or of a request for a smaller step ([`HostSignal`], [`request_step_ratio`]);
-//! the table's counters ([`UmatStats`]).
+//! a failure before it is reported ([`Failed`]); the table's books that both modes write
+//! ([`Books`]: counters, point ids, the VTK switch) and its counters ([`UmatStats`]).
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use crate::error::Error;
 use crate::host::hypothesis::Hypothesis;
-use crate::host::vtk_dump::DumpAt;
+use crate::host::material::Material;
+use crate::host::vtk_dump::{DumpAt, VtkDump};
 
 /// How the host hears of a failure or a request for a smaller step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -87,6 +90,18 @@ pub struct Outcome {
     pub iterations: u32,
 }
 
+impl Outcome {
+    /// A `STATEV`-mode answer (no commit or revert: the host keeps the state).
+    pub(super) fn answered(solved: bool, iterations: u32) -> Self {
+        Outcome {
+            solved,
+            committed: false,
+            reverted: false,
+            iterations,
+        }
+    }
+}
+
 /// Why a call failed, with what the host receives in `PNEWDT`.
 #[derive(Clone, Debug)]
 pub struct UmatFailure {
@@ -145,4 +160,126 @@ pub fn request_step_ratio(pnewdt: &mut f64, ratio: f64) {
 /// `CMNAME` without its padding (blanks or NULs).
 pub(super) fn trim(cmname: &str) -> &str {
     cmname.trim_end_matches([' ', '\0'])
+}
+
+/// A failed call before it is reported: the error, whether it is reported for the first
+/// time, and the material when known (for the elastic `DDSDDE`).
+pub(super) struct Failed {
+    pub(super) error: Arc<Error>,
+    pub(super) first: bool,
+    pub(super) material: Option<Arc<Material>>,
+}
+
+impl Failed {
+    /// A failure to resolve a call's material (the error, and whether it is reported for
+    /// the first time): no material.
+    pub(super) fn unresolved((error, first): (Arc<Error>, bool)) -> Self {
+        Failed {
+            error,
+            first,
+            material: None,
+        }
+    }
+
+    /// The failures of a call whose material is known, each reported as new.
+    pub(super) fn of(material: &Arc<Material>) -> impl Fn(Error) -> Failed + Copy + '_ {
+        |e| Failed {
+            error: Arc::new(e),
+            first: true,
+            material: Some(material.clone()),
+        }
+    }
+}
+
+/// A failure without a material.
+pub(super) fn plain(e: Error) -> Failed {
+    Failed {
+        error: Arc::new(e),
+        first: true,
+        material: None,
+    }
+}
+
+/// What both modes write besides their points: the counters, the next point id, the
+/// table's number (the key of its points in each thread's `STATEV`-mode slots) and the
+/// `MESORVE_UMAT_VTK` switch.
+pub(super) struct Books {
+    pub(super) table: u64,
+    pub(super) next_id: AtomicU64,
+    pub(super) calls: AtomicU64,
+    pub(super) solves: AtomicU64,
+    pub(super) repeats: AtomicU64,
+    pub(super) commits: AtomicU64,
+    pub(super) reverts: AtomicU64,
+    pub(super) loads: AtomicU64,
+    pub(super) failures: AtomicU64,
+    pub(super) shared: AtomicU64,
+    pub(super) vtk: Option<VtkDump>,
+}
+
+impl Books {
+    /// The books of a new table, numbered in the process.
+    pub(super) fn new() -> Self {
+        static TABLES: AtomicU64 = AtomicU64::new(1);
+        let zero = || AtomicU64::new(0);
+        Books {
+            table: TABLES.fetch_add(1, Ordering::Relaxed),
+            next_id: AtomicU64::new(1),
+            calls: zero(),
+            solves: zero(),
+            repeats: zero(),
+            commits: zero(),
+            reverts: zero(),
+            loads: zero(),
+            failures: zero(),
+            shared: zero(),
+            vtk: None,
+        }
+    }
+
+    /// A new point's id (1, 2, ... in creation order).
+    pub(super) fn new_id(&self) -> u64 {
+        self.next_id.fetch_add(1, Ordering::Relaxed)
+    }
+
+    /// Adds one to `counter`.
+    pub(super) fn count(counter: &AtomicU64) {
+        counter.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Adds one to `counter` when `happened`.
+    pub(super) fn add(counter: &AtomicU64, happened: bool) {
+        counter.fetch_add(u64::from(happened), Ordering::Relaxed);
+    }
+
+    /// Counts a solved (true) or repeated (false) answer.
+    pub(super) fn count_answer(&self, solved: bool) {
+        Self::count(if solved { &self.solves } else { &self.repeats });
+    }
+
+    /// The counters, with `points` points in the table.
+    pub(super) fn stats(&self, points: u64) -> UmatStats {
+        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
+        UmatStats {
+            calls: get(&self.calls),
+            solves: get(&self.solves),
+            repeats: get(&self.repeats),
+            commits: get(&self.commits),
+            reverts: get(&self.reverts),
+            loads: get(&self.loads),
+            failures: get(&self.failures),
+            shared: get(&self.shared),
+            points,
+        }
+    }
+
+    /// Writes the fields of `instance`'s trial when the switch chooses the call's point.
+    pub(super) fn dump(&self, instance: &crate::model::Instance, c: &UmatCall) {
+        crate::host::vtk_dump::at_answer(&self.vtk, instance, &c.dump_at());
+    }
+
+    /// Whether the switch writes the fields of the call's point.
+    pub(super) fn dumps(&self, c: &UmatCall) -> bool {
+        self.vtk.as_ref().is_some_and(|v| v.chooses(c.noel, c.npt))
+    }
 }

@@ -1,21 +1,76 @@
-//! The entry of a UMAT call: checks the lengths, resolves the material and picks the
-//! mode by `NSTATV` ([`in_statev_mode`]); the modes themselves are `statev_mode.rs` and
-//! `table_mode.rs`.
+//! The table of a host's integration points ([`Umat`]): its materials (resolved once per
+//! name and `PROPS`), its two modes, its books. A call ([`Umat::call_as`]) checks the
+//! lengths, finds the material and picks the mode by `NSTATV` ([`statev_mode_for`]); a
+//! failed call gets the material's elastic `DDSDDE` ([`Umat::fail`]), and what the host
+//! hears of a failure or a request for a smaller step is decided once, [`tell_host`].
 
-use std::sync::atomic::Ordering;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, PoisonError};
 
-use super::call::{trim, HostSignal, Outcome, UmatCall, UmatFailure, UmatOutputs};
-use super::statev_mode::slot_material;
-use super::table::{plain, Failed, Umat};
-use super::table_mode::table_refused;
+use super::call::{
+    plain, request_step_ratio, trim, Books, Failed, HostSignal, Outcome, UmatCall, UmatFailure,
+    UmatOutputs, UmatStats,
+};
+use super::point::MaterialKey;
+use super::slots::slot_material;
+use super::statev_mode::StatevMode;
+use super::table_mode::{table_refused, TableMode};
 use crate::error::Error;
+use crate::host::material::{Material, SearchPath};
 use crate::host::mirrors::MIRRORS;
+use crate::host::vtk_dump::VtkDump;
 use mesorve_core::solver::Integration;
 
 /// `NSTATV` up to this keeps the state in the library's table (room for the mirrors).
 pub const TABLE_MODE_MAX_NSTATV: usize = MIRRORS;
 
+/// `PNEWDT` after a failure other than the solver's (which suggests its own ratio).
+pub const FAILURE_STEP_RATIO: f64 = 0.25;
+
+type MaterialEntry = Result<Arc<Material>, Arc<Error>>;
+
+/// The table of a host's integration points.
+pub struct Umat {
+    search: SearchPath,
+    /// The materials by name and `PROPS`, failures included (see [`Umat::material`]).
+    materials: Mutex<HashMap<MaterialKey, MaterialEntry>>,
+    statev: StatevMode,
+    table: TableMode,
+    books: Books,
+}
+
 impl Umat {
+    pub fn new(search: SearchPath) -> Self {
+        Umat {
+            search,
+            materials: Mutex::new(HashMap::new()),
+            statev: StatevMode::new(),
+            table: TableMode::new(),
+            books: Books::new(),
+        }
+    }
+
+    /// This table writing the RVE fields of the points `vtk` chooses ([`crate::host::vtk_dump`];
+    /// `None`: none, the default).
+    pub fn with_vtk(mut self, vtk: Option<VtkDump>) -> Self {
+        self.books.vtk = vtk;
+        self
+    }
+
+    /// The VTK switch of this table, if on.
+    pub fn vtk(&self) -> Option<&VtkDump> {
+        self.books.vtk.as_ref()
+    }
+
+    pub fn search_path(&self) -> &SearchPath {
+        &self.search
+    }
+
+    pub fn stats(&self) -> UmatStats {
+        let points = self.statev.points() + self.table.points();
+        self.books.stats(points as u64)
+    }
+
     /// One UMAT call of a host that passes `PNEWDT`: see the module documentation of
     /// [`crate::host::umat`].
     pub fn call(&self, c: &UmatCall, out: &mut UmatOutputs) -> Result<Outcome, UmatFailure> {
@@ -31,20 +86,21 @@ impl Umat {
         out: &mut UmatOutputs,
         signal: HostSignal,
     ) -> Result<Outcome, UmatFailure> {
-        self.calls.fetch_add(1, Ordering::Relaxed);
-        let result = self.call_inner(c, out, signal).map_err(|f| {
-            self.failures.fetch_add(1, Ordering::Relaxed);
-            self.fail(c, out, f.error, f.first, f.material.as_deref())
+        Books::count(&self.books.calls);
+        let result = self.answer(c, out, signal).map_err(|f| {
+            Books::count(&self.books.failures);
+            self.fail(c, out, f)
         });
-        let asks_smaller = *out.pnewdt > 0.0 && *out.pnewdt < 1.0;
-        if signal == HostSignal::NanStress && (result.is_err() || asks_smaller) {
-            out.stress.fill(f64::NAN);
-        }
+        let failed = result.as_ref().err().map(|f| f.pnewdt);
+        tell_host(signal, out.stress, out.pnewdt, failed);
         result
     }
 
-    /// The call in the mode its `NSTATV` picks, its failure not yet reported.
-    fn call_inner(
+    /// The call in the mode its `NSTATV` picks, its failure not yet reported. A numbering
+    /// host's point that knows the call's material answers without resolving it
+    /// ([`StatevMode::answer_held`]); otherwise the material is this thread's slot's
+    /// (a host without `PNEWDT`) or resolved by [`Umat::material`].
+    fn answer(
         &self,
         c: &UmatCall,
         out: &mut UmatOutputs,
@@ -52,20 +108,112 @@ impl Umat {
     ) -> Result<Outcome, Failed> {
         check_lengths(c, out).map_err(plain)?;
         check_dtime(c, None).map_err(plain)?;
-        let material = match slot_material(self.id, c) {
+        if signal == HostSignal::Pnewdt {
+            let in_mode = |m: &Arc<Material>, nstatv: usize| statev_mode_for(c, nstatv, m);
+            if let Some(answered) = self.statev.answer_held(&self.books, c, out, in_mode) {
+                return answered;
+            }
+        }
+        let material = match slot_material(self.books.table, c) {
             Some(m) => m,
             None => self.material(c).map_err(Failed::unresolved)?,
         };
-        let with_material = Failed::of(&material);
-        check_dtime(c, Some(material.model.solver.integration)).map_err(with_material)?;
-        let statev_len = material.model.statev_len();
-        if in_statev_mode(c, out.statev.len(), statev_len).map_err(with_material)? {
-            return self.statev_call(c, out, material, signal);
+        if statev_mode_for(c, out.statev.len(), &material)? {
+            return self.statev.call(&self.books, c, out, material, signal);
         }
         if signal == HostSignal::NanStress {
-            return Err(with_material(table_refused(out.statev.len(), statev_len)));
+            let needed = material.model.statev_len();
+            return Err(Failed::of(&material)(table_refused(
+                out.statev.len(),
+                needed,
+            )));
         }
-        self.table_call(c, out)
+        self.table.call(&self.books, c, out, material)
+    }
+
+    /// The material of a call, resolved once per name and `PROPS` (failures too, so a
+    /// bad material is reported once and not rebuilt at every point; a scene file not
+    /// found is looked for again at the next call, so one written later is used). Returns
+    /// a failure's error with whether it is reported for the first time.
+    fn material(&self, c: &UmatCall) -> Result<Arc<Material>, (Arc<Error>, bool)> {
+        let key = MaterialKey::of(c);
+        let mut materials = self
+            .materials
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let reported = match materials.get(&key) {
+            // A scene not found yet may be written later: searched again at every call
+            // (a few file tests), reported once.
+            Some(Err(e)) if matches!(**e, Error::SceneNotFound { .. }) => true,
+            Some(entry) => return entry.clone().map_err(|e| (e, false)),
+            None => false,
+        };
+        let entry = Material::resolve(&key.cmname, c.props, &self.search)
+            .map(Arc::new)
+            .map_err(Arc::new);
+        materials.insert(key, entry.clone());
+        entry.map_err(|e| (e, !reported))
+    }
+
+    /// The embedded paper RVE, whose elastic tangent a failed call without a material
+    /// (a scene not found, a bad name or `PROPS`) returns: a host that assembles it gets
+    /// a regular matrix, not the zeros on which CalculiX reports a singular system.
+    fn embedded(&self) -> crate::Result<Material> {
+        Material::resolve("", &[], &self.search)
+    }
+
+    /// A failed call: `DDSDDE` the elastic tangent of its material's virgin RVE (of the
+    /// embedded paper RVE when the material is unknown), and the failure with the
+    /// `PNEWDT` it asks for (the solver's suggestion after a solver failure,
+    /// [`FAILURE_STEP_RATIO`] otherwise), which [`tell_host`] writes.
+    fn fail(&self, c: &UmatCall, out: &mut UmatOutputs, f: Failed) -> UmatFailure {
+        let pnewdt = match *f.error {
+            Error::Solve {
+                suggested_step_ratio,
+                ..
+            } => suggested_step_ratio,
+            _ => FAILURE_STEP_RATIO,
+        };
+        let n = c.hypothesis.ntens();
+        if out.ddsdde.len() == n * n {
+            let elastic = (f.material.as_deref())
+                .map(|m| m.elastic)
+                .or_else(|| self.embedded().ok().map(|m| m.elastic));
+            match elastic {
+                Some(e) => {
+                    // Lengths checked: cannot fail.
+                    let _ = c.hypothesis.host_tangent(&e, &e.tangent, out.ddsdde);
+                }
+                None => out.ddsdde.fill(0.0),
+            }
+        }
+        UmatFailure {
+            noel: c.noel,
+            npt: c.npt,
+            cmname: trim(c.cmname).to_string(),
+            error: f.error,
+            pnewdt,
+            first_report: f.first,
+        }
+    }
+}
+
+/// What a host hears besides the answer: after a failure (`failed`: the ratio it asks
+/// for) `PNEWDT` at most that ratio; and a host without `PNEWDT`
+/// ([`HostSignal::NanStress`]) NaN in `STRESS` when the call failed or asks for a
+/// smaller step (its own `pnewdt` below 1), the signal such a host cuts its step on.
+pub(super) fn tell_host(
+    signal: HostSignal,
+    stress: &mut [f64],
+    pnewdt: &mut f64,
+    failed: Option<f64>,
+) {
+    if let Some(ratio) = failed {
+        request_step_ratio(pnewdt, ratio);
+    }
+    let asks_smaller = *pnewdt > 0.0 && *pnewdt < 1.0;
+    if signal == HostSignal::NanStress && (failed.is_some() || asks_smaller) {
+        stress.fill(f64::NAN);
     }
 }
 
@@ -113,24 +261,28 @@ fn check_dtime(c: &UmatCall, integration: Option<Integration>) -> crate::Result<
     Ok(())
 }
 
-/// `STATEV` mode (true) or table mode (false) for a call with `nstatv` entries when the
-/// state needs `needed`: `STATEV` mode from `needed` on, table mode up to
-/// [`TABLE_MODE_MAX_NSTATV`] (room for the mirrors only, the 0.1-0.3 decks' rule for the
-/// table), an error naming the count in between (a `*DEPVAR` short of the state, which
-/// would otherwise run in the table without a restart or a re-added element carrying it).
-fn in_statev_mode(c: &UmatCall, nstatv: usize, needed: usize) -> crate::Result<bool> {
+/// `STATEV` mode (true) or table mode (false) for a call of `material` with `nstatv`
+/// entries, after its `DTIME` is checked for the material's integration: `STATEV` mode
+/// from the state's length on, table mode up to [`TABLE_MODE_MAX_NSTATV`] (room for the
+/// mirrors only, the 0.1-0.3 decks' rule for the table), an error naming the count in
+/// between (a `*DEPVAR` short of the state, which would otherwise run in the table
+/// without a restart or a re-added element carrying it).
+fn statev_mode_for(c: &UmatCall, nstatv: usize, material: &Arc<Material>) -> Result<bool, Failed> {
+    let with_material = Failed::of(material);
+    check_dtime(c, Some(material.model.solver.integration)).map_err(with_material)?;
+    let needed = material.model.statev_len();
     if nstatv >= needed {
         return Ok(true);
     }
     if nstatv <= TABLE_MODE_MAX_NSTATV {
         return Ok(false);
     }
-    Err(Error::HostConvention(format!(
+    Err(with_material(Error::HostConvention(format!(
         "NSTATV = {nstatv}: material `{}` keeps its RVE state in STATEV(1:{needed}) (set \
          *DEPVAR to at least {needed}, `rve info`'s umat_nstatv; {} with the {MIRRORS} \
          mirrors); an NSTATV of at most {TABLE_MODE_MAX_NSTATV} keeps the state in the \
          library's table instead",
         trim(c.cmname),
         needed + MIRRORS
-    )))
+    ))))
 }

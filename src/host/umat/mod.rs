@@ -1,6 +1,7 @@
 //! The standard Abaqus UMAT, safe side: a table of RVE instances keyed by (element,
 //! integration point) that follows the host's increments. `crate::ffi` exports it with
-//! the Abaqus argument list (`rve_umat`, `umat_`, `UMAT`) and only translates pointers.
+//! the Abaqus argument list (`rve_umat`, `umat_`, `UMAT`) and only translates pointers:
+//! [`answer_host`] takes the call from there and holds every rule of the C seam.
 //!
 //! **Two modes, chosen per call by `NSTATV`.**
 //! - **`STATEV` mode** (`NSTATV` >= the model's
@@ -21,7 +22,7 @@
 //!   that passes `PNEWDT` (CalculiX, Abaqus) numbers its points, and the cache is its
 //!   table's point `(NOEL, NPT)`: one rebuild per point and increment. A host that does not
 //!   (Kratos, every point 0) is keyed on nothing but the values: each thread keeps a few
-//!   instances per material (`SLOTS_PER_THREAD`, `statev_mode.rs`) and takes the one
+//!   instances per material (`slots.rs`) and takes the one
 //!   that holds them, so no point shares or waits for another.
 //!   `STATEV(umat_nstatv+1..+5)` receive the inspection mirrors below. A `STATEV` that is
 //!   not exactly what the library wrote (flipped bits, a changed, zeroed or truncated
@@ -78,13 +79,15 @@
 //! solver's suggestion after a solver failure, [`FAILURE_STEP_RATIO`] otherwise),
 //! `DDSDDE` the elastic tangent of the material's virgin RVE (of the embedded paper RVE
 //! when the material is unknown: a scene not found, a bad name or `PROPS`), `STRESS` is
-//! left as it came, and [`UmatFailure`] says what went wrong; the C shim keeps it for
-//! `rve_last_error` and says it on stderr once per reason ([`super::diagnostics`]).
+//! left as it came, and [`UmatFailure`] says what went wrong; [`answer_host`] returns it
+//! for `rve_last_error` and says it on stderr once per reason ([`super::diagnostics`]).
 //!
 //! **Threads.** Distinct points may be called from several threads at once (each thread
-//! keeps one workspace per model, and its own `STATEV`-mode instances: no lock is shared
-//! between points). In table mode one point from two threads at once is refused with
-//! `Error::HostConvention` (a host never does that within an increment).
+//! keeps one workspace per model; a numbering host's points are found in a map split in
+//! shards, and a point that knows its material answers without the table's lock on
+//! materials; a host without `PNEWDT` gets its own thread's instances). One point from two
+//! threads at once is refused with `Error::HostConvention` (a host never does that within
+//! an increment).
 //!
 //! **Hosts without `PNEWDT`** ([`HostSignal::NanStress`], Kratos): a failure or a request
 //! for a smaller step comes back as NaN in `STRESS`; `TIME` is one value (`TIME(2)` is not
@@ -93,27 +96,38 @@
 //!
 //! **Files.** Each file imports only the ones listed before it:
 //! - `call.rs`: the call and its answer ([`UmatCall`], [`UmatOutputs`], [`Outcome`],
-//!   [`UmatFailure`], [`HostSignal`], [`UmatStats`]);
-//! - `point.rs`: one point: its material, its instance, what table mode tracks of it
-//!   (increments) and what `STATEV` mode tracks (the hashes and times of the values its
-//!   instance caches);
-//! - `table.rs`: the table ([`Umat`], [`global`]): materials, points, counters, the answer
-//!   to a failure, the outputs both modes write;
-//! - `statev_mode.rs` and `table_mode.rs`: the two modes, as methods of [`Umat`] and
-//!   `Point`; neither uses the other;
-//! - `dispatch.rs`: [`Umat::call`], which picks the mode.
+//!   [`UmatFailure`], [`HostSignal`], [`UmatStats`]), a failure before it is reported,
+//!   and the table's books (counters, point ids, the VTK switch);
+//! - `point.rs`: one point as both modes keep it (its material as the host names it, its
+//!   instance, the outputs it writes) and the points by `(NOEL, NPT)`, a map in shards;
+//! - `statev_checks.rs`: `STATEV` mode's checks that the values are this point's at this
+//!   increment;
+//! - `statev_point.rs`: a `STATEV`-mode point, which values its instance stands for;
+//! - `slots.rs`: the `STATEV`-mode points of a host without `PNEWDT`, per thread;
+//! - `statev_mode.rs` and `table_mode.rs`: the two modes, one type each (`StatevMode`,
+//!   `TableMode` with its `TablePoint`); neither uses the other;
+//! - `dispatch.rs`: the table, [`Umat`]: its materials, [`Umat::call_as`], which picks
+//!   the mode, and what a host hears of a failure;
+//! - `host_call.rs`: [`answer_host`], the entry of the exported C functions: what is read
+//!   of a C call, the scene choice, host quirks, messages; the process's table
+//!   ([`global`]).
 
 mod call;
 mod dispatch;
+mod host_call;
 mod point;
+mod slots;
+mod statev_checks;
 mod statev_mode;
-mod table;
+mod statev_point;
 mod table_mode;
 
 pub use call::{
     request_step_ratio, HostSignal, Outcome, UmatCall, UmatFailure, UmatOutputs, UmatStats,
 };
-pub use dispatch::TABLE_MODE_MAX_NSTATV;
-pub use statev_mode::{strain_mismatch, STRAIN_MATCH_FLOOR, STRAIN_MATCH_RELATIVE};
-pub use table::{global, umat_scene, Umat, FAILURE_STEP_RATIO};
+pub use dispatch::{Umat, FAILURE_STEP_RATIO, TABLE_MODE_MAX_NSTATV};
+pub use host_call::{
+    answer_host, global, umat_scene, HostArrays, HostCall, HostError, HostLengths, HostScalars,
+};
+pub use statev_checks::{strain_mismatch, STRAIN_MATCH_FLOOR, STRAIN_MATCH_RELATIVE};
 pub use table_mode::note_ignored_redo;

@@ -1,16 +1,15 @@
-//! Table mode: the library keeps the point's state in its table keyed by `(NOEL, NPT)`
-//! and follows the host's increments (see the module documentation of
-//! [`crate::host::umat`]).
+//! Table mode ([`TableMode`]): the library keeps the point's state in its table keyed by
+//! `(NOEL, NPT)` and follows the host's increments ([`TablePoint`]; see the module
+//! documentation of [`crate::host::umat`]).
 
-use std::sync::atomic::Ordering;
+use std::sync::Arc;
 
-use super::call::{trim, Outcome, UmatCall, UmatOutputs};
-use super::point::{call_strain, lock, Increment, MaterialKey, Point, TIME_ROUNDOFF};
-use super::table::{plain, write_outputs, Failed, Umat};
+use super::call::{plain, trim, Books, Failed, Outcome, UmatCall, UmatOutputs};
+use super::point::{lock, Point, PointMap, TIME_ROUNDOFF};
 use crate::error::Error;
 use crate::host::diagnostics::{note_once, Note};
+use crate::host::material::Material;
 use crate::host::mirrors::MIRRORS;
-use crate::host::vtk_dump;
 use crate::model::workspaces::with_workspace;
 use crate::model::{share, Model, Response};
 
@@ -53,139 +52,6 @@ fn table_note(c: &UmatCall, nstatv: usize, model: &Model) {
     });
 }
 
-impl Umat {
-    /// Table mode: the point `(NOEL, NPT)` of the process's table, following the
-    /// host's increments.
-    pub(super) fn table_call(
-        &self,
-        c: &UmatCall,
-        out: &mut UmatOutputs,
-    ) -> Result<Outcome, Failed> {
-        let point = self.point(c).map_err(Failed::unresolved)?;
-        let mut p = lock(&point, c).map_err(plain)?;
-        if !p.key.matches(c) {
-            self.rebind(&mut p, c)?;
-        }
-        p.instance.set_lean(false);
-        let material = p.material.clone();
-        let with_material = Failed::of(&material);
-        table_note(c, out.statev.len(), &material.model);
-        let inc = Increment {
-            kstep: c.kstep,
-            kinc: c.kinc,
-            start: c.time[1],
-        };
-        let (committed, reverted) = p.advance(inc, c.dtime).map_err(with_material)?;
-        self.commits.fetch_add(committed as u64, Ordering::Relaxed);
-        self.reverts.fetch_add(reverted as u64, Ordering::Relaxed);
-        let (r, solved) = self.answer(&mut p, c).map_err(|e| {
-            p.table.failed = true;
-            with_material(e)
-        })?;
-        write_outputs(&p, c, &r, out, &[], None).map_err(with_material)?;
-        vtk_dump::at_answer(&self.vtk, &p.instance, &c.dump_at());
-        Ok(Outcome {
-            solved,
-            committed,
-            reverted,
-            iterations: r.report.iterations,
-        })
-    }
-
-    /// The RVE's answer at the call's strain: the point's trial when the strain repeats
-    /// it bit for bit, else a new trial (true: solved).
-    fn answer(&self, p: &mut Point, c: &UmatCall) -> crate::Result<(Response, bool)> {
-        let strain = call_strain(p, c)?;
-        if let Some((s, r)) = p.table.last {
-            if s.map(f64::to_bits) == strain.map(f64::to_bits) {
-                self.repeats.fetch_add(1, Ordering::Relaxed);
-                return Ok((r, false));
-            }
-        }
-        self.solves.fetch_add(1, Ordering::Relaxed);
-        let model = p.material.model.clone();
-        let request = p.material.tangent;
-        let r = with_workspace(&model, |ws| {
-            p.instance.update_timed(strain, c.dtime, ws, request)
-        });
-        p.table.last = r.as_ref().ok().map(|r| (strain, *r));
-        Ok((r?, true))
-    }
-
-    /// A point called with another material than it was created for: a new analysis
-    /// (`KSTEP` or `TIME(2)` gone back) makes it a virgin point of the call's material;
-    /// otherwise the call is refused. (In `STATEV` mode a point takes the material of
-    /// each call: `Umat::statev_call`.)
-    fn rebind(&self, p: &mut Point, c: &UmatCall) -> Result<(), Failed> {
-        let material = self.material(c).map_err(Failed::unresolved)?;
-        let inc = Increment {
-            kstep: c.kstep,
-            kinc: c.kinc,
-            start: c.time[1],
-        };
-        let new_analysis = p
-            .table
-            .increment
-            .is_some_and(|prev| inc.goes_back_from(&prev));
-        if !new_analysis {
-            return Err(plain(Error::HostConvention(format!(
-                "element {}, point {} was created for material `{}` with other PROPS or \
-                 another name; a point keeps its material within an analysis",
-                c.noel, c.npt, p.key.cmname
-            ))));
-        }
-        *p = Point::new(p.id, MaterialKey::of(c), material);
-        Ok(())
-    }
-}
-
-impl Point {
-    /// Applies the increment protocol before a call of `inc`; returns (committed,
-    /// reverted).
-    fn advance(&mut self, inc: Increment, dtime: f64) -> crate::Result<(bool, bool)> {
-        let (mut committed, mut reverted) = (false, false);
-        if let Some(prev) = self.table.increment.filter(|prev| inc.goes_back_from(prev)) {
-            // A new analysis (or a restart) in this process: the table cannot know the
-            // host's state at this time, so the point starts again from virgin.
-            note_once(Note::WentBack, || {
-                format!(
-                    "mesorve: KSTEP/TIME went back from ({}, {}) to ({}, {}): points of the \
-                     library's table restart from virgin RVEs (to carry it, keep the state \
-                     in STATEV: *DEPVAR at least `rve info`'s umat_nstatv, + {MIRRORS} for \
-                     the mirrors)",
-                    prev.kstep, prev.start, inc.kstep, inc.start
-                )
-            });
-            self.instance.reset();
-            self.table.last = None;
-            self.table.increment = None;
-        }
-        if let Some(prev) = self.table.increment {
-            let advanced =
-                inc.start - prev.start > TIME_ROUNDOFF * (prev.start.abs() + self.table.dtime);
-            let same = prev.kstep == inc.kstep && prev.kinc == inc.kinc && !advanced;
-            if !same {
-                if self.table.last.take().is_some() {
-                    let ignored = self.instance.ignored_redos().0;
-                    self.instance.commit()?;
-                    committed = true;
-                    if self.instance.ignored_redos().0 > ignored {
-                        note_ignored_redo(self.instance.ignored_redos().1);
-                    }
-                }
-            } else if self.table.failed || dtime < self.table.dtime * (1.0 - TIME_ROUNDOFF) {
-                self.instance.revert();
-                self.table.last = None;
-                reverted = true;
-            }
-        }
-        self.table.increment = Some(inc);
-        self.table.dtime = dtime;
-        self.table.failed = false;
-        Ok((committed, reverted))
-    }
-}
-
 /// Said once per process when a host kept an increment whose integration error exceeded
 /// `solver.step_tolerance` (`relative`: its estimate over the tolerance): the host ignored
 /// the request to redo it smaller. Shared by the UMAT's table mode and `rve_commit`.
@@ -198,4 +64,208 @@ pub fn note_ignored_redo(relative: f64) {
              step; the analysis goes on outside the tolerance there (printed once)"
         )
     });
+}
+
+/// Table mode of a table: its points by `(NOEL, NPT)`.
+pub(super) struct TableMode {
+    points: PointMap<TablePoint>,
+}
+
+impl TableMode {
+    pub(super) fn new() -> Self {
+        TableMode {
+            points: PointMap::new(),
+        }
+    }
+
+    /// Points in the table.
+    pub(super) fn points(&self) -> usize {
+        self.points.len()
+    }
+
+    /// A call of `material`: the point `(NOEL, NPT)`, following the host's increments.
+    pub(super) fn call(
+        &self,
+        books: &Books,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        material: Arc<Material>,
+    ) -> Result<Outcome, Failed> {
+        let point =
+            (self.points).get_or_insert(c, || TablePoint::new(books.new_id(), c, material.clone()));
+        let mut p = lock(&point, c, TablePoint::recover).map_err(plain)?;
+        if !p.point.key.matches(c) {
+            p.rebind(c, material)?;
+        }
+        p.point.instance.set_lean(false);
+        let material = p.point.material.clone();
+        let with_material = Failed::of(&material);
+        table_note(c, out.statev.len(), &material.model);
+        let inc = Increment::of(c);
+        let (committed, reverted) = p.advance(inc, c.dtime).map_err(with_material)?;
+        Books::add(&books.commits, committed);
+        Books::add(&books.reverts, reverted);
+        let (r, solved) = p.answer(books, c).map_err(|e| {
+            p.failed = true;
+            with_material(e)
+        })?;
+        (p.point)
+            .write_outputs(c, &r, out, &[], None)
+            .map_err(with_material)?;
+        books.dump(&p.point.instance, c);
+        Ok(Outcome {
+            solved,
+            committed,
+            reverted,
+            iterations: r.report.iterations,
+        })
+    }
+}
+
+/// The increment a call belongs to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Increment {
+    kstep: i32,
+    kinc: i32,
+    /// `TIME(2)`.
+    start: f64,
+}
+
+impl Increment {
+    fn of(c: &UmatCall) -> Self {
+        Increment {
+            kstep: c.kstep,
+            kinc: c.kinc,
+            start: c.time[1],
+        }
+    }
+
+    /// Whether this increment comes before `prev`: an earlier step, an earlier total time
+    /// (beyond round-off) in the same step, or an earlier `KINC` at the same time.
+    fn goes_back_from(&self, prev: &Increment) -> bool {
+        let roundoff = TIME_ROUNDOFF * prev.start.abs();
+        self.kstep < prev.kstep
+            || (self.kstep == prev.kstep
+                && (self.start < prev.start - roundoff
+                    || (self.start <= prev.start + roundoff && self.kinc < prev.kinc)))
+    }
+}
+
+/// A table-mode point: a [`Point`] and the host's increments as it saw them, which commit
+/// or revert its instance's trial.
+struct TablePoint {
+    point: Point,
+    /// The increment of the last call.
+    increment: Option<Increment>,
+    /// `DTIME` of the last call.
+    dtime: f64,
+    /// The strain and answer of the instance's trial (`Some` exactly when it has one).
+    last: Option<([f64; 3], Response)>,
+    /// The last call failed.
+    failed: bool,
+}
+
+impl TablePoint {
+    /// A virgin point of `material`, which `c` names.
+    fn new(id: u64, c: &UmatCall, material: Arc<Material>) -> Self {
+        TablePoint {
+            point: Point::new(id, c, material),
+            increment: None,
+            dtime: 0.0,
+            last: None,
+            failed: false,
+        }
+    }
+
+    /// After a panic in a call of this point: the trial dropped, as after a failure.
+    fn recover(&mut self) {
+        self.point.instance.revert();
+        self.last = None;
+        self.failed = true;
+    }
+
+    /// A point called with another material than it was created for: a new analysis
+    /// (`KSTEP` or `TIME(2)` gone back) makes it a virgin point of the call's material;
+    /// otherwise the call is refused. (In `STATEV` mode a point takes the material of
+    /// each call.)
+    fn rebind(&mut self, c: &UmatCall, material: Arc<Material>) -> Result<(), Failed> {
+        let inc = Increment::of(c);
+        let new_analysis = self.increment.is_some_and(|prev| inc.goes_back_from(&prev));
+        if !new_analysis {
+            return Err(plain(Error::HostConvention(format!(
+                "element {}, point {} was created for material `{}` with other PROPS or \
+                 another name; a point keeps its material within an analysis",
+                c.noel, c.npt, self.point.key.cmname
+            ))));
+        }
+        *self = TablePoint::new(self.point.id, c, material);
+        Ok(())
+    }
+
+    /// Applies the increment protocol before a call of `inc`; returns (committed,
+    /// reverted).
+    fn advance(&mut self, inc: Increment, dtime: f64) -> crate::Result<(bool, bool)> {
+        let (mut committed, mut reverted) = (false, false);
+        let instance = &mut self.point.instance;
+        if let Some(prev) = self.increment.filter(|prev| inc.goes_back_from(prev)) {
+            // A new analysis (or a restart) in this process: the table cannot know the
+            // host's state at this time, so the point starts again from virgin.
+            note_once(Note::WentBack, || {
+                format!(
+                    "mesorve: KSTEP/TIME went back from ({}, {}) to ({}, {}): points of the \
+                     library's table restart from virgin RVEs (to carry it, keep the state \
+                     in STATEV: *DEPVAR at least `rve info`'s umat_nstatv, + {MIRRORS} for \
+                     the mirrors)",
+                    prev.kstep, prev.start, inc.kstep, inc.start
+                )
+            });
+            instance.reset();
+            self.last = None;
+            self.increment = None;
+        }
+        if let Some(prev) = self.increment {
+            let advanced = inc.start - prev.start > TIME_ROUNDOFF * (prev.start.abs() + self.dtime);
+            let same = prev.kstep == inc.kstep && prev.kinc == inc.kinc && !advanced;
+            if !same {
+                if self.last.take().is_some() {
+                    let ignored = instance.ignored_redos().0;
+                    instance.commit()?;
+                    committed = true;
+                    if instance.ignored_redos().0 > ignored {
+                        note_ignored_redo(instance.ignored_redos().1);
+                    }
+                }
+            } else if self.failed || dtime < self.dtime * (1.0 - TIME_ROUNDOFF) {
+                instance.revert();
+                self.last = None;
+                reverted = true;
+            }
+        }
+        self.increment = Some(inc);
+        self.dtime = dtime;
+        self.failed = false;
+        Ok((committed, reverted))
+    }
+
+    /// The RVE's answer at the call's strain: the instance's trial when the strain repeats
+    /// it bit for bit, else a new trial (true: solved).
+    fn answer(&mut self, books: &Books, c: &UmatCall) -> crate::Result<(Response, bool)> {
+        let strain = self.point.strain(c)?;
+        if let Some((s, r)) = self.last {
+            if s.map(f64::to_bits) == strain.map(f64::to_bits) {
+                Books::count(&books.repeats);
+                return Ok((r, false));
+            }
+        }
+        Books::count(&books.solves);
+        let (model, request) = (
+            self.point.material.model.clone(),
+            self.point.material.tangent,
+        );
+        let r = with_workspace(&model, |ws| {
+            (self.point.instance).update_timed(strain, c.dtime, ws, request)
+        });
+        self.last = r.as_ref().ok().map(|r| (strain, *r));
+        Ok((r?, true))
+    }
 }

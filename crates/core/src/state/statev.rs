@@ -39,6 +39,7 @@
 //! bits and overwritten entries, the length and trailing zeros catch truncation. A state
 //! of another fingerprint is [`Error::StateOwner`].
 
+use std::borrow::Cow;
 use std::cell::RefCell;
 
 use serde::{Deserialize, Serialize};
@@ -88,11 +89,13 @@ pub struct Core {
 
 /// A [`Core`] borrowing its buffers, encoded to the same bytes ([`encode_payload`]): what
 /// [`write`] encodes, so that a state's core is written without copying its histories.
+/// The contact status is borrowed where the state holds it in the core's layout, and
+/// formed otherwise.
 #[derive(Clone, Debug)]
 pub struct CoreView<'a> {
     pub strain: [f64; 3],
     pub history: &'a [f64],
-    pub closed: Vec<u64>,
+    pub closed: Cow<'a, [u64]>,
     pub previous: &'a [f64],
     pub step: f64,
     pub at_start: bool,
@@ -119,7 +122,7 @@ impl CoreView<'_> {
         } = core;
         self.strain == *strain
             && self.history == history.as_slice()
-            && self.closed == *closed
+            && *self.closed == **closed
             && self.previous == previous.as_slice()
             && self.step == *step
             && self.at_start == *at_start
@@ -131,7 +134,7 @@ impl CoreView<'_> {
         Core {
             strain: self.strain,
             history: self.history.to_vec(),
-            closed: self.closed.clone(),
+            closed: self.closed.to_vec(),
             previous: self.previous.to_vec(),
             step: self.step,
             at_start: self.at_start,
@@ -171,7 +174,7 @@ impl Core {
         CoreView {
             strain: self.strain,
             history: &self.history,
-            closed: self.closed.clone(),
+            closed: Cow::Borrowed(&self.closed),
             previous: &self.previous,
             step: self.step,
             at_start: self.at_start,
