@@ -7,6 +7,7 @@
 //! counted with the counting allocator of `tests/no_alloc.rs`: the host's point is found,
 //! its material known, its `STATEV` checked, the IMPL-EX update made (the second call and
 //! the repeat without a factorization) and the trial encoded without a heap allocation.
+//! The same cycle with a short `NSTATV` (table mode) allocates nothing either.
 
 mod common;
 #[path = "common/counting_alloc.rs"]
@@ -48,15 +49,17 @@ fn counted_call(
     n
 }
 
-/// Follows the cycle with calls of a host that hears by `signal`; the allocations of
-/// each increment's calls after the warm-up: (increment, first, second, repeat).
-fn cycle(signal: HostSignal) -> Vec<(usize, usize, usize, usize)> {
+/// Follows the cycle with calls of a host that hears by `signal`, with `STATEV` room for
+/// the state (else 5 entries: table mode); the allocations of each increment's calls
+/// after the warm-up: (increment, first, second, repeat).
+fn cycle(signal: HostSignal, statev_mode: bool) -> Vec<(usize, usize, usize, usize)> {
     let path = rve::scene::path_points(&common::scene("scenes/paper_rve_cycle.toml").spec.path);
     let model =
         rve::model::cache::model_for_file(&common::repo("scenes/paper_rve_host_implex.toml"))
             .unwrap();
     let umat = Umat::new(SearchPath::new([common::repo("scenes")]));
-    let mut statev = vec![0.0; model.statev_len() + 5];
+    let n = if statev_mode { model.statev_len() } else { 0 };
+    let mut statev = vec![0.0; n + 5];
     let mut written = statev.clone();
     let mut allocations = Vec::new();
     for (k, &end) in path.iter().enumerate() {
@@ -77,17 +80,23 @@ fn cycle(signal: HostSignal) -> Vec<(usize, usize, usize, usize)> {
 }
 
 #[test]
-fn a_statev_mode_call_does_not_allocate_with_or_without_pnewdt() {
-    for signal in [HostSignal::Pnewdt, HostSignal::NanStress] {
-        let allocations = cycle(signal);
-        println!("{signal:?}: (increment, first call, second call, repeat): {allocations:?}");
-        assert!(allocations.len() >= 50, "{signal:?}: {allocations:?}");
+fn a_warm_umat_call_does_not_allocate_in_either_mode_or_host_style() {
+    let hosts = [
+        (HostSignal::Pnewdt, true),
+        (HostSignal::NanStress, true),
+        (HostSignal::Pnewdt, false),
+    ];
+    for (signal, statev_mode) in hosts {
+        let allocations = cycle(signal, statev_mode);
+        let host = format!("{signal:?}, STATEV mode {statev_mode}");
+        println!("{host}: (increment, first call, second call, repeat): {allocations:?}");
+        assert!(allocations.len() >= 50, "{host}: {allocations:?}");
         for &(k, first, second, repeat) in &allocations {
             assert_eq!(
                 (first, second, repeat),
                 (0, 0, 0),
-                "{signal:?}, increment {k}: allocations of the first call, the second and \
-                 the repeat"
+                "{host}, increment {k}: allocations of the first call, the second and the \
+                 repeat"
             );
         }
     }

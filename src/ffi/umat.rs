@@ -11,20 +11,29 @@ use super::guard::{guard, Failure};
 use super::status::RveStatus;
 use crate::host::umat::{answer_host, HostArrays, HostCall, HostError, HostLengths, HostScalars};
 
-/// `n` values at `p`; `None` when `p` is NULL.
+/// `n` values at `p`; `None` when `p` is NULL. Nothing is read at `p` for `n` = 0 (an
+/// array of no entries, which a host may pass unaligned).
 ///
 /// # Safety
 /// A non-NULL `p` must point to `n` values readable for `'a`.
 unsafe fn read<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    (!p.is_null()).then(|| std::slice::from_raw_parts(p, n))
+    match (p.is_null(), n) {
+        (true, _) => None,
+        (false, 0) => Some(&[]),
+        _ => Some(std::slice::from_raw_parts(p, n)),
+    }
 }
 
-/// `n` writable values at `p`; `None` when `p` is NULL.
+/// `n` writable values at `p`; `None` when `p` is NULL (as [`read`]).
 ///
 /// # Safety
 /// A non-NULL `p` must point to `n` values writable for `'a` and not aliased.
 unsafe fn write<'a>(p: *mut f64, n: usize) -> Option<&'a mut [f64]> {
-    (!p.is_null()).then(|| std::slice::from_raw_parts_mut(p, n))
+    match (p.is_null(), n) {
+        (true, _) => None,
+        (false, 0) => Some(&mut []),
+        _ => Some(std::slice::from_raw_parts_mut(p, n)),
+    }
 }
 
 impl From<HostError> for Failure {

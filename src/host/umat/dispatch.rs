@@ -98,8 +98,8 @@ impl Umat {
 
     /// The call in the mode its `NSTATV` picks, its failure not yet reported. A numbering
     /// host's point that knows the call's material answers without resolving it
-    /// ([`StatevMode::answer_held`]); otherwise the material is this thread's slot's
-    /// (a host without `PNEWDT`) or resolved by [`Umat::material`].
+    /// ([`StatevMode::answer_held`], [`TableMode::answer_held`]); otherwise the material is
+    /// this thread's slot's (a host without `PNEWDT`) or resolved by [`Umat::material`].
     fn answer(
         &self,
         c: &UmatCall,
@@ -110,7 +110,10 @@ impl Umat {
         check_dtime(c, None).map_err(plain)?;
         if signal == HostSignal::Pnewdt {
             let in_mode = |m: &Arc<Material>, nstatv: usize| statev_mode_for(c, nstatv, m);
-            if let Some(answered) = self.statev.answer_held(&self.books, c, out, in_mode) {
+            let books = &self.books;
+            let held = (self.statev.answer_held(books, c, out, in_mode))
+                .or_else(|| self.table.answer_held(books, c, out, in_mode));
+            if let Some(answered) = held {
                 return answered;
             }
         }

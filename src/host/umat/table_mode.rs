@@ -83,7 +83,31 @@ impl TableMode {
         self.points.len()
     }
 
-    /// A call of `material`: the point `(NOEL, NPT)`, following the host's increments.
+    /// A call whose point exists, is free and was last called with the call's material
+    /// (name and `PROPS`, compared in place), when `in_mode` (the table's choice of mode
+    /// for that material) says table mode: answered without resolving the material (as
+    /// [`StatevMode::answer_held`](super::statev_mode::StatevMode::answer_held)). `None`:
+    /// the call goes the general way.
+    pub(super) fn answer_held(
+        &self,
+        books: &Books,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+        in_mode: impl FnOnce(&Arc<Material>, usize) -> Result<bool, Failed>,
+    ) -> Option<Result<Outcome, Failed>> {
+        let point = self.points.get(c)?;
+        let mut p = point.try_lock().ok()?;
+        if !p.point.key.matches(c) {
+            return None;
+        }
+        match in_mode(&p.point.material, out.statev.len()) {
+            Ok(true) => None,
+            Ok(false) => Some(p.answer_point(books, c, out)),
+            Err(f) => Some(Err(f)),
+        }
+    }
+
+    /// A call of `material`: the point `(NOEL, NPT)`, made for it on its first call.
     pub(super) fn call(
         &self,
         books: &Books,
@@ -97,28 +121,7 @@ impl TableMode {
         if !p.point.key.matches(c) {
             p.rebind(c, material)?;
         }
-        p.point.instance.set_lean(false);
-        let material = p.point.material.clone();
-        let with_material = Failed::of(&material);
-        table_note(c, out.statev.len(), &material.model);
-        let inc = Increment::of(c);
-        let (committed, reverted) = p.advance(inc, c.dtime).map_err(with_material)?;
-        Books::add(&books.commits, committed);
-        Books::add(&books.reverts, reverted);
-        let (r, solved) = p.answer(books, c).map_err(|e| {
-            p.failed = true;
-            with_material(e)
-        })?;
-        (p.point)
-            .write_outputs(c, &r, out, &[], None)
-            .map_err(with_material)?;
-        books.dump(&p.point.instance, c);
-        Ok(Outcome {
-            solved,
-            committed,
-            reverted,
-            iterations: r.report.iterations,
-        })
+        p.answer_point(books, c, out)
     }
 }
 
@@ -182,6 +185,37 @@ impl TablePoint {
         self.point.instance.revert();
         self.last = None;
         self.failed = true;
+    }
+
+    /// The point's answer to a call of its material, following the host's increments.
+    fn answer_point(
+        &mut self,
+        books: &Books,
+        c: &UmatCall,
+        out: &mut UmatOutputs,
+    ) -> Result<Outcome, Failed> {
+        self.point.instance.set_lean(false);
+        let material = self.point.material.clone();
+        let with_material = Failed::of(&material);
+        table_note(c, out.statev.len(), &material.model);
+        let inc = Increment::of(c);
+        let (committed, reverted) = self.advance(inc, c.dtime).map_err(with_material)?;
+        Books::add(&books.commits, committed);
+        Books::add(&books.reverts, reverted);
+        let (r, solved) = self.answer(books, c).map_err(|e| {
+            self.failed = true;
+            with_material(e)
+        })?;
+        (self.point)
+            .write_outputs(c, &r, out, &[], None)
+            .map_err(with_material)?;
+        books.dump(&self.point.instance, c);
+        Ok(Outcome {
+            solved,
+            committed,
+            reverted,
+            iterations: r.report.iterations,
+        })
     }
 
     /// A point called with another material than it was created for: a new analysis
