@@ -62,12 +62,11 @@ impl StatevMode {
         if !p.point.key.matches(c) {
             return None;
         }
-        let material = p.point.material.clone();
-        match in_mode(&material, out.statev.len()) {
-            Ok(true) => Some(
-                self.answer_point(books, &mut p, c, out)
-                    .map_err(Failed::of(&material)),
-            ),
+        match in_mode(&p.point.material, out.statev.len()) {
+            Ok(true) => {
+                let answered = self.answer_point(books, &mut p, c, out);
+                Some(answered.map_err(|e| Failed::of(&p.point.material)(e)))
+            }
             Ok(false) => None,
             Err(f) => Some(Err(f)),
         }
@@ -220,7 +219,6 @@ impl StatevMode {
         (timed, may_share): (bool, bool),
     ) -> crate::Result<(Response, bool)> {
         let strain = p.point.strain(c)?;
-        let model = p.point.material.model.clone();
         if !p.holds_core(statev) {
             self.load(books, p, c, statev)?;
         }
@@ -229,7 +227,7 @@ impl StatevMode {
         p.trial_hash = None;
         let request = p.point.material.tangent;
         let step = may_share.then(|| self.shared_step(p, c)).flatten();
-        let r = with_workspace(&model, |ws| {
+        let r = with_workspace(&p.point.material.model, |ws| {
             (p.point.instance).update_timed(strain, c.dtime, ws, request)
         })?;
         p.trial_time = timed.then(|| c.time[1] + c.dtime);
@@ -248,7 +246,7 @@ impl StatevMode {
                 response: r,
                 trial,
             };
-            self.share.insert(&model, increment_key(c), anchor);
+            (self.share).insert(&p.point.material.model, increment_key(c), anchor);
         }
         books.count_answer(solved);
         Ok((r, solved))
