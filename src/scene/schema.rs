@@ -8,7 +8,7 @@ use mesorve_core::constraint::BoundaryCondition;
 use mesorve_core::element::InterfaceQuadrature;
 use mesorve_core::geometry::{Explicit, RandomSpec};
 use mesorve_core::interface::InterfaceLawSpec;
-pub use mesorve_core::interface::{ItzSpec, LinearItzSpec, PenaltySpec};
+pub use mesorve_core::interface::{CrackSpec, ItzSpec, LinearItzSpec, PenaltySpec};
 use mesorve_core::material::{Analysis, IsotropicElastic};
 use mesorve_core::solver::{ContactStatus, Integration, Settings};
 
@@ -166,6 +166,9 @@ pub struct MaterialsSpec {
     /// A linear elastic ITZ instead (verification, compliant bonding).
     #[serde(default)]
     pub linear_itz: Option<LinearItzSpec>,
+    /// The law of cracks through the paste (`effects.paste_cracking`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub paste_crack: Option<CrackSpec>,
 }
 
 impl MaterialsSpec {
@@ -196,6 +199,11 @@ pub struct EffectsSpec {
     /// Penalty contact when a crack closes (needs `cohesive`).
     #[serde(default = "yes")]
     pub contact: bool,
+    /// Cracks through the paste: interface elements on the paste's element edges with
+    /// `materials.paste_crack`'s law (`docs/fracture.md`). Off (the default) is left out
+    /// of the scene's fingerprint, so scenes without the key keep theirs.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub paste_cracking: bool,
 }
 
 impl Default for EffectsSpec {
@@ -203,6 +211,7 @@ impl Default for EffectsSpec {
         EffectsSpec {
             cohesive: true,
             contact: true,
+            paste_cracking: false,
         }
     }
 }

@@ -320,6 +320,10 @@ pub struct CrackSpec {
     /// Mode-mixity weight; absent: 1 (shear and normal strength alike).
     #[serde(default = "one")]
     pub beta: f64,
+    /// The rectangle `[x0, y0, x1, y1]` whose paste edges may crack (by their midpoint);
+    /// absent: the whole paste.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band: Option<[f64; 4]>,
 }
 
 fn one() -> f64 {
@@ -339,6 +343,14 @@ impl CrackSpec {
                 require_positive(&format!("materials.{key}.{name}"), v)?;
             }
         }
+        if let Some([x0, y0, x1, y1]) = self.band {
+            if !(x0 < x1 && y0 < y1) || [x0, y0, x1, y1].iter().any(|v| !v.is_finite()) {
+                return Err(Error::scene(
+                    format!("materials.{key}.band"),
+                    format!("must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got {:?}", self.band),
+                ));
+            }
+        }
         if !(self.beta.is_finite() && self.beta >= 0.0) {
             return Err(Error::scene(
                 format!("materials.{key}.beta"),
@@ -346,6 +358,12 @@ impl CrackSpec {
             ));
         }
         Ok(())
+    }
+
+    /// Whether the paste edge of midpoint `p` may crack (inside the band, if any).
+    pub fn cracks_at(&self, p: [f64; 2]) -> bool {
+        self.band
+            .is_none_or(|[x0, y0, x1, y1]| (x0..=x1).contains(&p[0]) && (y0..=y1).contains(&p[1]))
     }
 
     /// The law, with `default_stiffness` (the model's `STIFFNESS_FACTOR E / h`) where the
