@@ -33,8 +33,8 @@
 //! without interfaces, gives 0 for both.
 
 use crate::model::{Instance, Model};
-use mesorve_core::element::InterfaceGeometry;
 use mesorve_core::assembly::InterfaceLaws;
+use mesorve_core::element::InterfaceGeometry;
 
 /// Mirrors written at most.
 pub const MIRRORS: usize = 5;

@@ -126,7 +126,12 @@ impl Model {
             });
         }
         let np = self.disc.points_per_interface();
-        let admissible = |h: &[f64]| self.disc.law.as_ref().is_none_or(|l| l.history_is_valid(h, np));
+        let admissible = |h: &[f64]| {
+            self.disc
+                .law
+                .as_ref()
+                .is_none_or(|l| l.history_is_valid(h, np))
+        };
         if !admissible(&core.history) || !admissible(&core.previous) {
             return Err(Error::BadState {
                 reason: "an interface history value the interface law does not admit (for \

@@ -287,6 +287,53 @@ pub type ContactStatusSpec = ContactStatus;
 pub struct PathSegment {
     pub to: [f64; 3],
     pub increments: u32,
+    /// Components held at zero stress along the segment (`["yy"]`: uniaxial stress in x
+    /// with `to = [eps, 0, 0]`); their strain is found (`model::mixed`), and their value in
+    /// `to` must be 0.
+    #[serde(default, skip_serializing_if = "ZeroStress::is_none")]
+    pub zero_stress: ZeroStress,
+}
+
+/// Which of `[xx, yy, xy]` a path segment holds at zero stress; in a scene, a list of
+/// their names (`["yy", "xy"]`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(try_from = "Vec<String>", into = "Vec<String>")]
+pub struct ZeroStress(pub [bool; 3]);
+
+impl ZeroStress {
+    const NAMES: [&'static str; 3] = ["xx", "yy", "xy"];
+
+    /// No component held.
+    pub fn is_none(&self) -> bool {
+        self.0 == [false; 3]
+    }
+}
+
+impl TryFrom<Vec<String>> for ZeroStress {
+    type Error = String;
+    fn try_from(names: Vec<String>) -> std::result::Result<Self, String> {
+        let mut held = [false; 3];
+        for n in names {
+            let i = Self::NAMES
+                .iter()
+                .position(|c| *c == n)
+                .ok_or_else(|| format!("`{n}` is not a stress component (xx, yy, xy)"))?;
+            held[i] = true;
+        }
+        if held == [true; 3] {
+            return Err("every component at zero stress leaves nothing to prescribe".into());
+        }
+        Ok(ZeroStress(held))
+    }
+}
+
+impl From<ZeroStress> for Vec<String> {
+    fn from(z: ZeroStress) -> Self {
+        (0..3)
+            .filter(|&i| z.0[i])
+            .map(|i| ZeroStress::NAMES[i].to_string())
+            .collect()
+    }
 }
 
 fn yes() -> bool {

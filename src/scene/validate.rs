@@ -314,6 +314,16 @@ fn validate_path(path: &[PathSegment]) -> Result<()> {
                 ),
             ));
         }
+        if let Some(i) = (0..3).find(|&i| seg.zero_stress.0[i] && seg.to[i] != 0.0) {
+            return Err(Error::scene(
+                format!("path[{k}].to"),
+                format!(
+                    "component {i} is held at zero stress (path[{k}].zero_stress): its strain \
+                     is found, so its value in `to` must be 0, got {}",
+                    seg.to[i]
+                ),
+            ));
+        }
     }
     Ok(())
 }

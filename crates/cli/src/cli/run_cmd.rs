@@ -9,7 +9,8 @@ use std::time::Instant;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rve::error::{Error, Result};
-use rve::scene::path_points;
+use rve::model::mixed::update_mixed;
+use rve::scene::{path_points, path_zero_stress};
 use rve::{Instance, Model, Response, TangentRequest};
 
 use super::load_scene_with;
@@ -78,6 +79,11 @@ fn parse_frames(s: &str) -> std::result::Result<Frames, String> {
 /// Header of `response.csv`; the C driver writes the same columns.
 pub const CSV_HEADER: &str = "step,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy,D11,D12,D13,D21,D22,D23,D31,D32,D33,iterations,substeps,s_zz,factorizations,loading_points,unloading_points,contact_points,seconds,limit_points,held_points,fast,check_factorizations,step_too_large,error_estimate,step_ratio";
 
+/// Whether step control would have to follow a mixed-controlled segment.
+fn controlled_with_zero_stress(solver: &rve::scene::SolverSpec, zero_stress: &[[bool; 3]]) -> bool {
+    solver.step_tolerance.is_some() && zero_stress.iter().any(|z| *z != [false; 3])
+}
+
 pub fn run(args: &RunArgs) -> Result<()> {
     let (scene, name) = load_scene_with(args.scene.as_ref(), &args.set)?;
     if scene.spec.path.is_empty() {
@@ -109,6 +115,14 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .unwrap_or_else(|_| ProgressStyle::default_bar());
         ProgressBar::new(points.len() as u64).with_style(style)
     });
+    let zero_stress = path_zero_stress(&scene.spec.path);
+    if controlled_with_zero_stress(&scene.spec.solver, &zero_stress) {
+        return Err(Error::scene(
+            "path",
+            "zero_stress segments are followed with the path's own increments: leave out \
+             solver.step_tolerance for them",
+        ));
+    }
     let times = step_times(&points);
     let controlled = scene.spec.solver.step_tolerance.is_some();
     let mut control = StepControl::default();
@@ -117,7 +131,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
             control.follow(&mut instance, &mut ws, &mut outputs, eps, times[step])?
         } else {
             let t0 = Instant::now();
-            let r = instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
+            let (r, eps) = if zero_stress[step] == [false; 3] {
+                let r =
+                    instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
+                (r, eps)
+            } else {
+                update_mixed(&mut instance, eps, zero_stress[step], times[step], &mut ws)?
+            };
             let seconds = t0.elapsed().as_secs_f64();
             instance.commit()?;
             outputs.record(step + 1, eps, &r, seconds, instance.committed())?;

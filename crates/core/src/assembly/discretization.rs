@@ -16,11 +16,11 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix3, SMatrix, SVector};
 
+use super::laws::InterfaceLaws;
 use super::pattern::{Pattern, NO_SLOT};
 use crate::constraint::{BoundaryCondition, DofMap, FIXED};
 use crate::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature};
 use crate::error::Result;
-use super::laws::InterfaceLaws;
 use crate::interface::{Implex, InterfaceLaw, TangentKind};
 use crate::material::{Analysis, IsotropicElastic};
 use crate::mesh::{InterfaceElement, Mesh, Phase};
@@ -117,7 +117,11 @@ impl Discretization {
         let law = match &spec.law {
             Some(itz) => {
                 let kinds = mesh.interfaces.iter().map(|e| e.kind).collect();
-                Some(InterfaceLaws::new(itz.clone(), spec.paste_law.clone(), kinds)?)
+                Some(InterfaceLaws::new(
+                    itz.clone(),
+                    spec.paste_law.clone(),
+                    kinds,
+                )?)
             }
             None => None,
         };

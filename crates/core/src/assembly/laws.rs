@@ -28,8 +28,7 @@ impl InterfaceLaws {
         match &paste {
             None if has_paste => {
                 return Err(Error::Mesh(
-                    "the mesh has paste interface elements and the scene no paste crack law"
-                        .into(),
+                    "the mesh has paste interface elements and the scene no paste crack law".into(),
                 ))
             }
             Some(p) if p.history_len() != itz.history_len() => {

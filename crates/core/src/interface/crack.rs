@@ -347,7 +347,10 @@ impl CrackSpec {
             if !(x0 < x1 && y0 < y1) || [x0, y0, x1, y1].iter().any(|v| !v.is_finite()) {
                 return Err(Error::scene(
                     format!("materials.{key}.band"),
-                    format!("must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got {:?}", self.band),
+                    format!(
+                        "must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got {:?}",
+                        self.band
+                    ),
                 ));
             }
         }

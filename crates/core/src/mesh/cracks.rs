@@ -27,7 +27,9 @@
 
 use std::collections::HashMap;
 
-use super::model::{BoundaryNodes, InterfaceElement, InterfaceKind, Mesh, Phase, PhaseMesh, Triangle};
+use super::model::{
+    BoundaryNodes, InterfaceElement, InterfaceKind, Mesh, Phase, PhaseMesh, Triangle,
+};
 use crate::error::{Error, Result};
 
 /// Inserts interface elements on every ITZ edge and on the matrix-matrix edges whose
@@ -63,7 +65,10 @@ pub fn insert_cracks(
                 if at_corner(a) || at_corner(b) || !paste(mid) {
                     continue;
                 }
-                ((t0.min(t1), if t0 < t1 { k0 } else { k1 }, t0.max(t1)), InterfaceKind::Paste)
+                (
+                    (t0.min(t1), if t0 < t1 { k0 } else { k1 }, t0.max(t1)),
+                    InterfaceKind::Paste,
+                )
             }
             (Phase::Inclusion, Phase::Inclusion) => continue,
         };
@@ -92,7 +97,12 @@ pub fn insert_cracks(
             let length = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
             let tangent = [(q[0] - p[0]) / length, (q[1] - p[1]) / length];
             InterfaceElement {
-                nodes: [copy_of(n0, c.a), copy_of(n1, c.a), copy_of(n0, c.b), copy_of(n1, c.b)],
+                nodes: [
+                    copy_of(n0, c.a),
+                    copy_of(n1, c.a),
+                    copy_of(n0, c.b),
+                    copy_of(n1, c.b),
+                ],
                 length,
                 tangent,
                 normal: [tangent[1], -tangent[0]],
@@ -207,7 +217,12 @@ fn node_copies(
 
 /// The boundary of a cracked mesh: corners, each side's trace copies in order, and the
 /// periodic ties (see the module documentation).
-fn boundary_of(nodes: &[[f64; 2]], triangles: &[Triangle], width: f64, height: f64) -> Result<BoundaryNodes> {
+fn boundary_of(
+    nodes: &[[f64; 2]],
+    triangles: &[Triangle],
+    width: f64,
+    height: f64,
+) -> Result<BoundaryNodes> {
     let tol = 1e-9 * width.max(height);
     let near = |a: f64, b: f64| (a - b).abs() <= tol;
     // Boundary edges (one triangle) with the side they lie on: 0 bottom, 1 right, 2 top,

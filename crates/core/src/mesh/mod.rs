@@ -13,7 +13,9 @@ pub use boundary::{find_boundary_nodes, find_boundary_nodes_split};
 pub use cracks::insert_cracks;
 pub use itz::{insert_itz, without_itz};
 pub use model::BoundaryNodes;
-pub use model::{InterfaceElement, InterfaceKind, Mesh, Microstructure, Phase, PhaseMesh, Triangle};
+pub use model::{
+    InterfaceElement, InterfaceKind, Mesh, Microstructure, Phase, PhaseMesh, Triangle,
+};
 pub use stats::triangle_angles_deg;
 pub use stats::MeshStats;
 pub use triangulate::{triangulate, triangulate_straight_interface};

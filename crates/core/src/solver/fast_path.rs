@@ -80,7 +80,8 @@ pub fn answers(problem: &Problem, history: &[f64], linear: &LinearBranch, strain
         .all(|(q, (a, &closed))| {
             let (s, es) = component(&a[..3], strain);
             let (n, en) = component(&a[3..], strain);
-            laws.of(q / np).stays_linear(&history[q * hl..(q + 1) * hl], [s, n], [es, en], closed)
+            laws.of(q / np)
+                .stays_linear(&history[q * hl..(q + 1) * hl], [s, n], [es, en], closed)
         })
 }
 
@@ -121,9 +122,9 @@ pub fn build(
     linear.closed.resize(points, false);
     jump_operators(problem, ws.factorization.kg(), &mut linear.jumps);
     let closed = &mut linear.closed;
-    problem
-        .disc
-        .for_each_jump(&state.unknowns, |q, jump| closed[q] = laws.of(q / np).is_closed(jump));
+    problem.disc.for_each_jump(&state.unknowns, |q, jump| {
+        closed[q] = laws.of(q / np).is_closed(jump)
+    });
     // `K_b` was assembled with the held contact status: it must be the gaps' (no point
     // held against its gap, see `contact`).
     if ws
