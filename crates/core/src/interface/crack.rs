@@ -37,14 +37,17 @@
 //! symmetric (the traction derives from the potential `phi(delta)`); on the elastic branch
 //! `t' = k = K` and `C = K diag(beta^2, 1)`; unloading `C = k(delta_max) diag(beta^2, 1)`.
 //!
-//! Contact on closure (`delta_n < 0`, when contact is on): the normal penalty `k_p` and the
-//! shear stuck at the penalty too (`t = k_p [delta_s, delta_n]`, the paper's closed ITZ),
-//! the history frozen. The history is `delta_max` alone.
+//! Contact on closure (`delta_n < 0`, when contact is on): the normal penalty `k_p`; the
+//! shear by the law of the sliding alone (`delta = beta |delta_s|`, which may advance the
+//! history: a closed crack can be sheared open, and a fully open one slides freely), or
+//! stuck at the penalty (`t = k_p [delta_s, delta_n]`, the paper's closed ITZ, history
+//! frozen). The history is `delta_max` alone.
 
 use std::sync::Arc;
 
 use nalgebra::{Matrix2, Vector2};
 
+use super::cohesive::ContactShear;
 use super::law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
 use crate::error::{require_positive, Error, Result};
 
@@ -54,7 +57,7 @@ const C2: f64 = 6.93;
 /// `1 / int_0^1 h(x) dx` for these constants: `w_c = WC_FACTOR G_f / f_t`.
 pub const WC_FACTOR: f64 = 5.136;
 /// The secant left to a fully open crack, over the initial stiffness.
-pub const RESIDUAL: f64 = 1e-6;
+pub const RESIDUAL: f64 = 1e-9;
 /// The default initial stiffness over the paste's `E / h` (`h` the mesh size): each
 /// interface adds about `1 / STIFFNESS_FACTOR` of a paste element's compliance.
 pub const STIFFNESS_FACTOR: f64 = 200.0;
@@ -74,6 +77,10 @@ pub struct CrackLaw {
     pub penalty: f64,
     /// Unilateral contact on closure; off: the law acts on `|delta_n|` in compression too.
     pub contact: bool,
+    /// What carries the shear of a closed point: the penalty (stuck), or the crack's own
+    /// law of the sliding alone (a fully open crack then slides freely), as the ITZ's
+    /// [`super::ContactShear`].
+    pub contact_shear: ContactShear,
 }
 
 impl CrackLaw {
@@ -156,16 +163,27 @@ impl CrackLaw {
         closed: bool,
     ) -> (Vector2<f64>, Matrix2<f64>, f64, Branch) {
         let [ds, dn] = jump;
-        if self.contact && closed {
-            let kp = self.penalty;
-            return (
+        if !(self.contact && closed) {
+            return self.open(delta_max, ds, dn);
+        }
+        let kp = self.penalty;
+        match self.contact_shear {
+            ContactShear::Penalty => (
                 Vector2::new(kp * ds, kp * dn),
                 Matrix2::from_diagonal_element(kp),
                 delta_max,
                 Branch::Contact,
-            );
+            ),
+            ContactShear::Cohesive => {
+                // The law of the sliding alone (`delta_n` clamped at 0), the normal penalty.
+                let (mut t, mut c, trial, _) = self.open(delta_max, ds, 0.0);
+                t.y = kp * dn;
+                c[(0, 1)] = 0.0;
+                c[(1, 0)] = 0.0;
+                c[(1, 1)] = kp;
+                (t, c, trial, Branch::Contact)
+            }
         }
-        self.open(delta_max, ds, dn)
     }
 }
 
@@ -230,8 +248,13 @@ impl InterfaceLaw for CrackLaw {
         _length: f64,
         closed: bool,
     ) {
-        let delta = (self.beta * jump[0]).hypot(jump[1]);
-        trial[0] = if self.contact && closed {
+        let closed = self.contact && closed;
+        let delta = if closed {
+            (self.beta * jump[0]).abs()
+        } else {
+            (self.beta * jump[0]).hypot(jump[1])
+        };
+        trial[0] = if closed && self.contact_shear == ContactShear::Penalty {
             committed[0]
         } else {
             committed[0].max(delta)
@@ -253,18 +276,21 @@ impl InterfaceLaw for CrackLaw {
             return unloading;
         }
         if closed {
-            dn + en < 0.0
+            let sliding = self.beta * (ds.abs() + es);
+            dn + en < 0.0 && (self.contact_shear == ContactShear::Penalty || sliding < history[0])
         } else {
             dn - en >= 0.0 && unloading
         }
     }
 
     fn frozen_secant(&self, history: &[f64], closed: bool, _length: f64) -> Option<Matrix2<f64>> {
-        if self.contact && closed {
-            return Some(Matrix2::from_diagonal_element(self.penalty));
-        }
         let k = self.secant(history[0]);
-        Some(Matrix2::new(k * self.beta * self.beta, 0.0, 0.0, k))
+        let shear = k * self.beta * self.beta;
+        Some(match (self.contact && closed, self.contact_shear) {
+            (false, _) => Matrix2::new(shear, 0.0, 0.0, k),
+            (true, ContactShear::Penalty) => Matrix2::from_diagonal_element(self.penalty),
+            (true, ContactShear::Cohesive) => Matrix2::new(shear, 0.0, 0.0, self.penalty),
+        })
     }
 
     fn traction_scale(&self) -> f64 {
@@ -320,6 +346,10 @@ pub struct CrackSpec {
     /// Mode-mixity weight; absent: 1 (shear and normal strength alike).
     #[serde(default = "one")]
     pub beta: f64,
+    /// The shear of a closed crack: `"cohesive"` (the default: the law of the sliding, so
+    /// an open crack slides freely once closed) or `"penalty"` (stuck, as the paper's ITZ).
+    #[serde(default = "cohesive_shear")]
+    pub contact_shear: ContactShear,
     /// The rectangle `[x0, y0, x1, y1]` whose paste edges may crack (by their midpoint);
     /// absent: the whole paste.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -328,6 +358,10 @@ pub struct CrackSpec {
 
 fn one() -> f64 {
     1.0
+}
+
+fn cohesive_shear() -> ContactShear {
+    ContactShear::Cohesive
 }
 
 impl CrackSpec {
@@ -380,6 +414,7 @@ impl CrackSpec {
             beta: self.beta,
             penalty: self.penalty.unwrap_or(stiffness),
             contact,
+            contact_shear: self.contact_shear,
         })
     }
 }
@@ -396,6 +431,7 @@ mod tests {
             beta: 0.8,
             penalty: 5e6,
             contact: true,
+            contact_shear: ContactShear::Cohesive,
         }
     }
 
@@ -438,6 +474,7 @@ mod tests {
             (0.1 * wc, [0.2 * wc, 0.25 * wc], false),
             (0.5 * wc, [0.1 * wc, 0.2 * wc], false),
             (0.5 * wc, [0.1 * wc, -0.2 * wc], true),
+            (0.1 * wc, [0.3 * wc, -0.2 * wc], true),
         ];
         for (h, jump, closed) in cases {
             let c = l.evaluate_as(h, jump, closed).1;
