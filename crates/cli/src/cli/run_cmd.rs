@@ -108,13 +108,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     outputs.create_dirs()?;
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
-    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
-        let style = ProgressStyle::with_template(
-            "{bar:32} {pos}/{len} increments, {elapsed} (eta {eta})  {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
-        ProgressBar::new(points.len() as u64).with_style(style)
-    });
+    let progress = Progress::new(args.quiet, points.len());
     let zero_stress = path_zero_stress(&scene.spec.path);
     if controlled_with_zero_stress(&scene.spec.solver, &zero_stress) {
         return Err(Error::scene(
@@ -143,23 +137,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
             outputs.record(step + 1, eps, &r, seconds, instance.committed())?;
             r
         };
-        if let Some(bar) = &bar {
-            bar.set_message(format!(
-                "sig = [{:+.4} {:+.4} {:+.4}]",
-                r.stress[0], r.stress[1], r.stress[2]
-            ));
-            bar.inc(1);
-        } else if !args.quiet {
-            eprintln!(
-                "step {:4}  eps = [{:+.3e} {:+.3e} {:+.3e}]  sig = [{:+.4} {:+.4} {:+.4}]  it {} sub {}",
-                step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
-                r.report.iterations, r.report.substeps
-            );
-        }
+        progress.step(step, eps, &r);
     }
-    if let Some(bar) = &bar {
-        bar.finish();
-    }
+    progress.finish();
     if controlled && !args.quiet {
         eprintln!(
             "{name}: solver.step_tolerance: {} increments, {} redone smaller, {} kept above \
@@ -169,6 +149,49 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
     }
     outputs.finish()
+}
+
+/// `rve run`'s progress on stderr: a bar on a terminal, a line per increment otherwise,
+/// nothing when quiet.
+struct Progress {
+    bar: Option<ProgressBar>,
+    lines: bool,
+}
+
+impl Progress {
+    fn new(quiet: bool, increments: usize) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let style = ProgressStyle::with_template(
+                "{bar:32} {pos}/{len} increments, {elapsed} (eta {eta})  {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+            ProgressBar::new(increments as u64).with_style(style)
+        });
+        let lines = !quiet && bar.is_none();
+        Self { bar, lines }
+    }
+
+    fn step(&self, step: usize, eps: [f64; 3], r: &Response) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!(
+                "sig = [{:+.4} {:+.4} {:+.4}]",
+                r.stress[0], r.stress[1], r.stress[2]
+            ));
+            bar.inc(1);
+        } else if self.lines {
+            eprintln!(
+                "step {:4}  eps = [{:+.3e} {:+.3e} {:+.3e}]  sig = [{:+.4} {:+.4} {:+.4}]  it {} sub {}",
+                step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
+                r.report.iterations, r.report.substeps
+            );
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish();
+        }
+    }
 }
 
 /// Smallest step `rve run` takes under `solver.step_tolerance`, as a fraction of the

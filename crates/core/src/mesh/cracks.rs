@@ -44,50 +44,15 @@ pub fn insert_cracks(
         mut nodes,
         mut triangles,
     } = phase_mesh;
-    let tol = 1e-9 * width.max(height);
-    let at_corner = |p: [f64; 2]| {
-        let near = |a: f64, b: f64| (a - b).abs() <= tol;
-        (near(p[0], 0.0) || near(p[0], width)) && (near(p[1], 0.0) || near(p[1], height))
-    };
     let edges = edge_map(&triangles)?;
-    let mut cracks: Vec<Crack> = Vec::new();
-    for (&(n0, n1), tris) in &edges {
-        let [(t0, k0), (t1, k1)] = tris[..] else {
-            continue;
-        };
-        let (p0, p1) = (triangles[t0].phase, triangles[t1].phase);
-        let (side_a, kind) = match (p0, p1) {
-            (Phase::Inclusion, Phase::Matrix) => ((t0, k0, t1), InterfaceKind::Itz),
-            (Phase::Matrix, Phase::Inclusion) => ((t1, k1, t0), InterfaceKind::Itz),
-            (Phase::Matrix, Phase::Matrix) => {
-                let (a, b) = (nodes[n0], nodes[n1]);
-                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
-                if at_corner(a) || at_corner(b) || !paste(mid) {
-                    continue;
-                }
-                (
-                    (t0.min(t1), if t0 < t1 { k0 } else { k1 }, t0.max(t1)),
-                    InterfaceKind::Paste,
-                )
-            }
-            (Phase::Inclusion, Phase::Inclusion) => continue,
-        };
-        let (ta, ka, tb) = side_a;
-        let tri = &triangles[ta];
-        cracks.push(Crack {
-            ends: [tri.nodes[ka], tri.nodes[(ka + 1) % 3]],
-            a: ta,
-            b: tb,
-            kind,
-        });
-    }
+    let mut cracks = crack_edges(&nodes, &triangles, &edges, width, height, paste);
     // The ITZ first, then the paste, each by its nodes: a deterministic numbering.
     cracks.sort_unstable_by_key(|c| (c.kind, c.ends));
-    let crack_edges: std::collections::HashSet<(usize, usize)> = cracks
+    let crack_keys: std::collections::HashSet<(usize, usize)> = cracks
         .iter()
         .map(|c| (c.ends[0].min(c.ends[1]), c.ends[0].max(c.ends[1])))
         .collect();
-    let copies = node_copies(&mut nodes, &triangles, &edges, &crack_edges);
+    let copies = node_copies(&mut nodes, &triangles, &edges, &crack_keys);
     let copy_of = |n: usize, t: usize| copies[&(n, t)];
     let interfaces = cracks
         .iter()
@@ -124,6 +89,55 @@ pub fn insert_cracks(
         interfaces,
         boundary,
     })
+}
+
+/// The crack edges: every ITZ edge and the selected paste edges, side A as in the module
+/// documentation.
+fn crack_edges(
+    nodes: &[[f64; 2]],
+    triangles: &[Triangle],
+    edges: &Edges,
+    width: f64,
+    height: f64,
+    paste: impl Fn([f64; 2]) -> bool,
+) -> Vec<Crack> {
+    let tol = 1e-9 * width.max(height);
+    let at_corner = |p: [f64; 2]| {
+        let near = |a: f64, b: f64| (a - b).abs() <= tol;
+        (near(p[0], 0.0) || near(p[0], width)) && (near(p[1], 0.0) || near(p[1], height))
+    };
+    let mut cracks: Vec<Crack> = Vec::new();
+    for (&(n0, n1), tris) in edges {
+        let [(t0, k0), (t1, k1)] = tris[..] else {
+            continue;
+        };
+        let (p0, p1) = (triangles[t0].phase, triangles[t1].phase);
+        let (side_a, kind) = match (p0, p1) {
+            (Phase::Inclusion, Phase::Matrix) => ((t0, k0, t1), InterfaceKind::Itz),
+            (Phase::Matrix, Phase::Inclusion) => ((t1, k1, t0), InterfaceKind::Itz),
+            (Phase::Matrix, Phase::Matrix) => {
+                let (a, b) = (nodes[n0], nodes[n1]);
+                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+                if at_corner(a) || at_corner(b) || !paste(mid) {
+                    continue;
+                }
+                (
+                    (t0.min(t1), if t0 < t1 { k0 } else { k1 }, t0.max(t1)),
+                    InterfaceKind::Paste,
+                )
+            }
+            (Phase::Inclusion, Phase::Inclusion) => continue,
+        };
+        let (ta, ka, tb) = side_a;
+        let tri = &triangles[ta];
+        cracks.push(Crack {
+            ends: [tri.nodes[ka], tri.nodes[(ka + 1) % 3]],
+            a: ta,
+            b: tb,
+            kind,
+        });
+    }
+    cracks
 }
 
 /// A crack edge: its nodes counter-clockwise around triangle `a`, the triangle `b` across.
@@ -199,7 +213,7 @@ fn node_copies(
         }
         // Groups by their lowest triangle (`tris` is in increasing order).
         let mut group_node: HashMap<usize, usize> = HashMap::new();
-        for i in 0..tris.len() {
+        for (i, &t) in tris.iter().enumerate() {
             let r = root(&mut parent, i);
             let id = *group_node.entry(r).or_insert_with(|| {
                 if r == 0 {
@@ -209,7 +223,7 @@ fn node_copies(
                     nodes.len() - 1
                 }
             });
-            copy.insert((n, tris[i]), id);
+            copy.insert((n, t), id);
         }
     }
     copy
@@ -223,64 +237,12 @@ fn boundary_of(
     width: f64,
     height: f64,
 ) -> Result<BoundaryNodes> {
-    let tol = 1e-9 * width.max(height);
-    let near = |a: f64, b: f64| (a - b).abs() <= tol;
-    // Boundary edges (one triangle) with the side they lie on: 0 bottom, 1 right, 2 top,
-    // 3 left.
-    let mut count: HashMap<(usize, usize), u32> = HashMap::new();
-    for tri in triangles {
-        for k in 0..3 {
-            let (a, b) = (tri.nodes[k], tri.nodes[(k + 1) % 3]);
-            *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-        }
-    }
-    let side_of = |p: [f64; 2], q: [f64; 2]| -> Option<usize> {
-        if near(p[1], 0.0) && near(q[1], 0.0) {
-            Some(0)
-        } else if near(p[0], width) && near(q[0], width) {
-            Some(1)
-        } else if near(p[1], height) && near(q[1], height) {
-            Some(2)
-        } else if near(p[0], 0.0) && near(q[0], 0.0) {
-            Some(3)
-        } else {
-            None
-        }
-    };
-    // Per side, per node copy: the boundary edges it ends, as (position along the side of
-    // the edge's other end) -- below (smaller coordinate) or above.
-    let mut ends: [HashMap<usize, [bool; 2]>; 4] = Default::default();
-    for ((a, b), c) in &count {
-        if *c != 1 {
-            continue;
-        }
-        let (p, q) = (nodes[*a], nodes[*b]);
-        let Some(side) = side_of(p, q) else { continue };
-        let axis = if side % 2 == 0 { 0 } else { 1 };
-        for (n, other) in [(*a, q), (*b, p)] {
-            let above = other[axis] > nodes[n][axis];
-            ends[side].entry(n).or_insert([false; 2])[usize::from(above)] = true;
-        }
-    }
-    let corner_xy = [[0.0, 0.0], [width, 0.0], [width, height], [0.0, height]];
-    let mut corners = [usize::MAX; 4];
-    for (c, xy) in corner_xy.iter().enumerate() {
-        let found: Vec<usize> = (0..nodes.len())
-            .filter(|&i| near(nodes[i][0], xy[0]) && near(nodes[i][1], xy[1]))
-            .collect();
-        match found[..] {
-            [i] => corners[c] = i,
-            _ => {
-                return Err(Error::Mesh(format!(
-                    "{} nodes at the cell corner {xy:?}: a corner must be one node",
-                    found.len()
-                )))
-            }
-        }
-    }
+    let sides = Sides::new(nodes, width, height);
+    let ends = sides.edge_ends(triangles);
+    let corners = sides.corners()?;
     // Each side's copies (not the corners), along the side, the lower copy first.
     let list = |side: usize| -> Vec<usize> {
-        let axis = if side % 2 == 0 { 0 } else { 1 };
+        let axis = Sides::axis(side);
         let mut v: Vec<usize> = ends[side]
             .keys()
             .copied()
@@ -295,46 +257,9 @@ fn boundary_of(
         });
         v
     };
-    let (bottom, right, top, left) = (list(0), list(1), list(2), list(3));
-    // Periodic ties: at each position of a side, the copies ending the edge below and the
-    // edge above, tied to the opposite side's.
-    let mut ties = Vec::new();
-    let mut sides_match = true;
-    for (lo, hi) in [(3usize, 1usize), (0, 2)] {
-        let axis = if lo % 2 == 0 { 0 } else { 1 };
-        let at = |side: usize| -> Vec<(f64, [usize; 2])> {
-            let mut by_pos: Vec<(f64, [usize; 2])> = Vec::new();
-            for n in list(side) {
-                let pos = nodes[n][axis];
-                let e = ends[side][&n];
-                let slot = match by_pos.last_mut() {
-                    Some(last) if near(last.0, pos) => last,
-                    _ => {
-                        by_pos.push((pos, [usize::MAX; 2]));
-                        by_pos.last_mut().unwrap()
-                    }
-                };
-                for (k, has) in e.iter().enumerate() {
-                    if *has {
-                        slot.1[k] = n;
-                    }
-                }
-            }
-            by_pos
-        };
-        let (a, b) = (at(lo), at(hi));
-        if a.len() != b.len() || a.iter().zip(&b).any(|(x, y)| !near(x.0, y.0)) {
-            sides_match = false;
-            continue;
-        }
-        for ((_, ea), (_, eb)) in a.iter().zip(&b) {
-            for k in 0..2 {
-                if ea[k] != usize::MAX && eb[k] != usize::MAX {
-                    ties.push((eb[k], ea[k]));
-                }
-            }
-        }
-    }
+    let lists = [list(0), list(1), list(2), list(3)];
+    let (periodic_ties, sides_match) = sides.periodic_ties(&lists, &ends);
+    let [bottom, right, top, left] = lists;
     Ok(BoundaryNodes {
         corners,
         left,
@@ -342,6 +267,165 @@ fn boundary_of(
         bottom,
         top,
         sides_match,
-        periodic_ties: ties,
+        periodic_ties,
     })
+}
+
+/// Per node copy on a side: whether it ends a boundary edge below it and one above it
+/// (smaller, larger coordinate along the side).
+type EdgeEnds = [HashMap<usize, [bool; 2]>; 4];
+
+/// The cell's four sides (0 bottom, 1 right, 2 top, 3 left) over a node list.
+struct Sides<'a> {
+    nodes: &'a [[f64; 2]],
+    width: f64,
+    height: f64,
+    tol: f64,
+}
+
+impl<'a> Sides<'a> {
+    fn new(nodes: &'a [[f64; 2]], width: f64, height: f64) -> Self {
+        let tol = 1e-9 * width.max(height);
+        Self {
+            nodes,
+            width,
+            height,
+            tol,
+        }
+    }
+
+    fn near(&self, a: f64, b: f64) -> bool {
+        (a - b).abs() <= self.tol
+    }
+
+    /// The coordinate that runs along a side.
+    fn axis(side: usize) -> usize {
+        if side % 2 == 0 {
+            0
+        } else {
+            1
+        }
+    }
+
+    /// The side an edge lies on, if any.
+    fn side_of(&self, p: [f64; 2], q: [f64; 2]) -> Option<usize> {
+        let (w, h) = (self.width, self.height);
+        if self.near(p[1], 0.0) && self.near(q[1], 0.0) {
+            Some(0)
+        } else if self.near(p[0], w) && self.near(q[0], w) {
+            Some(1)
+        } else if self.near(p[1], h) && self.near(q[1], h) {
+            Some(2)
+        } else if self.near(p[0], 0.0) && self.near(q[0], 0.0) {
+            Some(3)
+        } else {
+            None
+        }
+    }
+
+    /// The boundary edges (those of one triangle) each node copy ends, per side.
+    fn edge_ends(&self, triangles: &[Triangle]) -> EdgeEnds {
+        let mut count: HashMap<(usize, usize), u32> = HashMap::new();
+        for tri in triangles {
+            for k in 0..3 {
+                let (a, b) = (tri.nodes[k], tri.nodes[(k + 1) % 3]);
+                *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        let mut ends: EdgeEnds = Default::default();
+        for ((a, b), c) in &count {
+            if *c != 1 {
+                continue;
+            }
+            let (p, q) = (self.nodes[*a], self.nodes[*b]);
+            let Some(side) = self.side_of(p, q) else {
+                continue;
+            };
+            let axis = Self::axis(side);
+            for (n, other) in [(*a, q), (*b, p)] {
+                let above = other[axis] > self.nodes[n][axis];
+                ends[side].entry(n).or_insert([false; 2])[usize::from(above)] = true;
+            }
+        }
+        ends
+    }
+
+    /// The four corner nodes, each of which must be one node.
+    fn corners(&self) -> Result<[usize; 4]> {
+        let (w, h) = (self.width, self.height);
+        let corner_xy = [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]];
+        let mut corners = [usize::MAX; 4];
+        for (c, xy) in corner_xy.iter().enumerate() {
+            let found: Vec<usize> = (0..self.nodes.len())
+                .filter(|&i| {
+                    self.near(self.nodes[i][0], xy[0]) && self.near(self.nodes[i][1], xy[1])
+                })
+                .collect();
+            match found[..] {
+                [i] => corners[c] = i,
+                _ => {
+                    return Err(Error::Mesh(format!(
+                        "{} nodes at the cell corner {xy:?}: a corner must be one node",
+                        found.len()
+                    )))
+                }
+            }
+        }
+        Ok(corners)
+    }
+
+    /// Periodic ties: at each position of a side, the copies ending the edge below and the
+    /// edge above, tied to the opposite side's; and whether the opposite sides' positions
+    /// match at all.
+    fn periodic_ties(
+        &self,
+        lists: &[Vec<usize>; 4],
+        ends: &EdgeEnds,
+    ) -> (Vec<(usize, usize)>, bool) {
+        let mut ties = Vec::new();
+        let mut sides_match = true;
+        for (lo, hi) in [(3usize, 1usize), (0, 2)] {
+            let (a, b) = (
+                self.positions(lo, lists, ends),
+                self.positions(hi, lists, ends),
+            );
+            if a.len() != b.len() || a.iter().zip(&b).any(|(x, y)| !self.near(x.0, y.0)) {
+                sides_match = false;
+                continue;
+            }
+            for ((_, ea), (_, eb)) in a.iter().zip(&b) {
+                for k in 0..2 {
+                    if ea[k] != usize::MAX && eb[k] != usize::MAX {
+                        ties.push((eb[k], ea[k]));
+                    }
+                }
+            }
+        }
+        (ties, sides_match)
+    }
+
+    /// A side's positions, each with the copy ending the edge below and the one above
+    /// (`usize::MAX` where none).
+    fn positions(
+        &self,
+        side: usize,
+        lists: &[Vec<usize>; 4],
+        ends: &EdgeEnds,
+    ) -> Vec<(f64, [usize; 2])> {
+        let axis = Self::axis(side);
+        let mut by_pos: Vec<(f64, [usize; 2])> = Vec::new();
+        for &n in &lists[side] {
+            let pos = self.nodes[n][axis];
+            if !matches!(by_pos.last(), Some(last) if self.near(last.0, pos)) {
+                by_pos.push((pos, [usize::MAX; 2]));
+            }
+            let slot = by_pos.last_mut().expect("pushed above");
+            for (k, has) in ends[side][&n].iter().enumerate() {
+                if *has {
+                    slot.1[k] = n;
+                }
+            }
+        }
+        by_pos
+    }
 }
