@@ -33,8 +33,8 @@
 //! without interfaces, gives 0 for both.
 
 use crate::model::{Instance, Model};
+use mesorve_core::assembly::InterfaceLaws;
 use mesorve_core::element::InterfaceGeometry;
-use mesorve_core::interface::InterfaceLaw;
 
 /// Mirrors written at most.
 pub const MIRRORS: usize = 5;
@@ -53,24 +53,25 @@ impl RveMeasures {
     /// by element, point by point) of a state of `model`. Allocates nothing.
     pub fn of(model: &Model, history: &[f64]) -> RveMeasures {
         let disc = &model.disc;
-        let Some(law) = disc.law.as_deref() else {
+        let Some(laws) = disc.law.as_ref() else {
             return RveMeasures::default();
         };
-        measures(law, disc.quadrature.rule(), &disc.interfaces, history)
+        measures(laws, disc.quadrature.rule(), &disc.interfaces, history)
     }
 }
 
 fn measures(
-    law: &dyn InterfaceLaw,
+    laws: &InterfaceLaws,
     rule: &[(f64, f64)],
     interfaces: &[InterfaceGeometry],
     history: &[f64],
 ) -> RveMeasures {
-    let hl = law.history_len();
+    let hl = laws.history_len();
     let per_element = rule.len() * hl;
     let (mut weighted, mut length, mut max_opening) = (0.0, 0.0, 0.0f64);
     for (e, geometry) in interfaces.iter().enumerate() {
         let h = &history[e * per_element..(e + 1) * per_element];
+        let law = laws.of(e);
         for (p, &(_, w)) in rule.iter().enumerate() {
             let Some((damage, opening)) =
                 law.history_measures(&h[p * hl..(p + 1) * hl], geometry.length)
@@ -168,7 +169,7 @@ mod tests {
         assert_eq!(one.max_opening, 10.0 * delta_c);
         assert!(one.damage > 0.0 && one.damage < 1.0);
         // The history-only shortcut equals the law's full measures.
-        let law = disc.law.as_deref().unwrap();
+        let law = disc.law.as_ref().unwrap().itz();
         for x in [0.0, 0.3, 1.0, 7.5] {
             let h = [x * delta_c];
             let full = law.measures(&h, [1e-5, -2e-5], 0.5).unwrap();

@@ -104,11 +104,11 @@ impl RveFields {
         state: &State,
         fluct: impl Fn(u32) -> f64,
     ) -> Vec<ItzFields> {
-        let Some(law) = disc.law.as_deref() else {
+        let Some(laws) = disc.law.as_ref() else {
             return Vec::new();
         };
         let rule = disc.quadrature.rule();
-        let hl = law.history_len();
+        let hl = laws.history_len();
         let per_element = rule.len() * hl;
         let mut scratch = vec![0.0; hl];
         let nan = PointMeasures {
@@ -125,6 +125,7 @@ impl RveFields {
                 let u = SVector::<f64, 8>::from_fn(|i, _| fluct(dofs[i]));
                 let jumps = interface4::local_jumps(geometry, disc.quadrature, &u);
                 let history = &state.history[e * per_element..(e + 1) * per_element];
+                let law = laws.of(e);
                 let (mut ds, mut dn) = (0.0, 0.0);
                 let mut m = PointMeasures {
                     opening_ratio: 0.0,

@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use crate::scene::SceneSpec;
-use mesorve_core::interface::InterfaceLaw;
+use mesorve_core::interface::{InterfaceLaw, STIFFNESS_FACTOR};
 
 /// The interface law of `[materials]`, or `None` without ITZ (`effects.cohesive` off, or
 /// no law given for a cell without inclusions).
@@ -17,4 +17,15 @@ pub fn interface_law(spec: &SceneSpec) -> Option<Arc<dyn InterfaceLaw>> {
     let mut laws = spec.materials.interface_laws().into_iter();
     let law = laws.find_map(|(_, law)| law)?;
     Some(law.build(spec.effects.contact))
+}
+
+/// The law of cracks through the paste (`effects.paste_cracking`), its default stiffness
+/// `STIFFNESS_FACTOR E_paste / h` (`h` the mesh size), or `None`.
+pub fn paste_law(spec: &SceneSpec) -> Option<Arc<dyn InterfaceLaw>> {
+    let crack = spec.materials.paste_crack.as_ref()?;
+    if !(spec.effects.cohesive && spec.effects.paste_cracking) {
+        return None;
+    }
+    let stiffness = STIFFNESS_FACTOR * spec.materials.matrix.young / spec.mesh.size;
+    Some(crack.build(spec.effects.contact, stiffness))
 }

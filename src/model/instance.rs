@@ -496,8 +496,8 @@ impl Instance {
     /// refused load changes nothing, the trial included.
     pub fn load_state(&mut self, bytes: &[u8]) -> Result<()> {
         let state = persist::decode(bytes, self.sizes(), self.model.fingerprint)?;
-        if let Some(law) = &self.model.disc.law {
-            if !law.history_is_valid(&state.history) {
+        if let Some(laws) = &self.model.disc.law {
+            if !laws.history_is_valid(&state.history, self.model.disc.points_per_interface()) {
                 return Err(Error::BadState {
                     reason: "an interface history value the interface law does not admit \
                              (for the cohesive law: a negative delta_max)"

@@ -1,14 +1,15 @@
-//! From a scene to a mesh: geometry, triangulation (or Gmsh import), ITZ insertion.
+//! From a scene to a mesh: geometry, triangulation (or Gmsh import), the insertion of
+//! interface elements (the ITZ, and cracks through the paste).
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::scene::{GeometrySpec, Scene};
+use crate::scene::{GeometrySpec, Scene, SceneSpec};
 use mesorve_core::geometry::{build_inclusions, place_random, Inclusion};
 use mesorve_core::mesh::gmsh::read_msh;
 use mesorve_core::mesh::{
-    insert_itz, triangulate, triangulate_straight_interface, without_itz, Mesh, Microstructure,
-    PhaseMesh,
+    insert_cracks, insert_itz, triangulate, triangulate_straight_interface, without_itz, Mesh,
+    Microstructure, PhaseMesh,
 };
 
 /// Builds the mesh that `scene` describes.
@@ -28,7 +29,7 @@ pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
             let path = scene.base_dir.join(&g.file);
             let phase_mesh = read_msh(&path, &g.matrix, &g.inclusions)?;
             let phase_mesh = fit_to_cell(phase_mesh, width, height, &path)?;
-            let mesh = finish(phase_mesh, width, height, spec.effects.cohesive)?;
+            let mesh = finish(phase_mesh, width, height, spec)?;
             return Ok(Microstructure {
                 mesh,
                 inclusions: Vec::new(),
@@ -45,7 +46,7 @@ pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
                 spec.mesh.interface_size.unwrap_or(spec.mesh.size),
                 spec.mesh.min_angle,
             )?;
-            let mesh = finish(phase_mesh, width, height, spec.effects.cohesive)?;
+            let mesh = finish(phase_mesh, width, height, spec)?;
             return Ok(Microstructure {
                 mesh,
                 inclusions: Vec::new(),
@@ -63,7 +64,7 @@ pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
         spec.mesh.size,
         spec.mesh.min_angle,
     )?;
-    let mesh = finish(phase_mesh, width, height, spec.effects.cohesive)?;
+    let mesh = finish(phase_mesh, width, height, spec)?;
     let area: f64 = inclusions.iter().map(Inclusion::area).sum();
     Ok(Microstructure {
         mesh,
@@ -73,11 +74,15 @@ pub fn build_microstructure(scene: &Scene) -> Result<Microstructure> {
     })
 }
 
-fn finish(phase_mesh: PhaseMesh, width: f64, height: f64, cohesive: bool) -> Result<Mesh> {
-    if cohesive {
-        insert_itz(phase_mesh, width, height)
-    } else {
-        without_itz(phase_mesh, width, height)
+/// The interface elements the scene's effects call for: none, the ITZ, or the ITZ and
+/// cracks through the paste.
+fn finish(phase_mesh: PhaseMesh, width: f64, height: f64, spec: &SceneSpec) -> Result<Mesh> {
+    match (&spec.materials.paste_crack, spec.effects) {
+        (_, e) if !e.cohesive => without_itz(phase_mesh, width, height),
+        (Some(crack), e) if e.paste_cracking => {
+            insert_cracks(phase_mesh, width, height, |p| crack.cracks_at(p))
+        }
+        _ => insert_itz(phase_mesh, width, height),
     }
 }
 

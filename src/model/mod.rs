@@ -9,6 +9,7 @@ mod fingerprint;
 mod from_scene;
 mod instance;
 mod microstructure;
+pub mod mixed;
 mod post;
 mod rve_model;
 pub mod share;

@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::fingerprint::scene_fingerprint;
-use super::from_scene::interface_law;
+use super::from_scene::{interface_law, paste_law};
 use super::microstructure::build_microstructure;
 use crate::error::{Error, Result};
 use crate::scene::{Scene, MAX_STRAIN};
@@ -96,6 +96,7 @@ impl Model {
                 matrix: spec.materials.matrix,
                 aggregate: spec.materials.aggregate.unwrap_or(spec.materials.matrix),
                 law: interface_law(spec),
+                paste_law: paste_law(spec),
                 quadrature: spec.mesh.interface_quadrature,
                 boundary,
             },

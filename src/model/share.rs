@@ -319,10 +319,10 @@ fn point_secants(
     point: impl Fn(usize, &dyn InterfaceLaw, &mut [f64]) -> bool,
 ) -> Vec<f32> {
     let disc = &model.disc;
-    let Some(law) = disc.law.as_deref() else {
+    let Some(laws) = disc.law.as_ref() else {
         return Vec::new();
     };
-    let (per_point, np) = (law.history_len(), disc.points_per_interface());
+    let (per_point, np) = (laws.history_len(), disc.points_per_interface());
     let mut stack = [0.0; POINT_HISTORY_MAX];
     let mut heap = Vec::new();
     let h: &mut [f64] = if per_point <= POINT_HISTORY_MAX {
@@ -333,6 +333,7 @@ fn point_secants(
     };
     let mut out = Vec::with_capacity(4 * np * disc.interfaces.len());
     for (e, geometry) in disc.interfaces.iter().enumerate() {
+        let law = laws.of(e);
         for q in e * np..(e + 1) * np {
             let closed = point(q, law, h);
             let secant = law

@@ -123,7 +123,7 @@ impl Model {
             && self
                 .disc
                 .law
-                .as_deref()
+                .as_ref()
                 .is_some_and(|l| l.has_contact_status());
         if held {
             let points = self.disc.interface_points();
@@ -145,7 +145,13 @@ impl Model {
                 reason: "a state core of another size than the model's, or not finite".into(),
             });
         }
-        let admissible = |h: &[f64]| self.disc.law.as_ref().is_none_or(|l| l.history_is_valid(h));
+        let np = self.disc.points_per_interface();
+        let admissible = |h: &[f64]| {
+            self.disc
+                .law
+                .as_ref()
+                .is_none_or(|l| l.history_is_valid(h, np))
+        };
         if !admissible(&core.history) || !admissible(&core.previous) {
             return Err(Error::BadState {
                 reason: "an interface history value the interface law does not admit (for \

@@ -10,11 +10,11 @@ mod validate;
 
 pub use load::{Scene, DEFAULT_SCENE_NAME, DEFAULT_SCENE_TOML};
 pub use mesorve_core::geometry::{Explicit, ExplicitInclusion, Orientation, RandomSpec, ShapeKind};
-pub use path::{path_points, MAX_STRAIN};
+pub use path::{path_points, path_zero_stress, MAX_STRAIN};
 pub use schema::{
-    BoundaryKind, BoundarySpec, CellSpec, ContactStatusSpec, EffectsSpec, ElasticSpec,
+    BoundaryKind, BoundarySpec, CellSpec, ContactStatusSpec, CrackSpec, EffectsSpec, ElasticSpec,
     GeometrySpec, GmshSpec, IntegrationSpec, InterfaceQuadratureSpec, ItzSpec, LinearItzSpec,
     MaterialsSpec, MeshSpec, PathSegment, PenaltySpec, SceneSpec, SolverSpec, StatevSpec,
-    StraightInterfaceSpec, ZeroAtStrain,
+    StraightInterfaceSpec, ZeroAtStrain, ZeroStress,
 };
 pub use validate::{MAX_PATH_INCREMENTS, MAX_TRIANGLES};

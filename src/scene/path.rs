@@ -9,6 +9,13 @@ use super::schema::PathSegment;
 /// fails; beyond it a small-strain RVE makes no sense and the input is taken as absurd.
 pub const MAX_STRAIN: f64 = 0.1;
 
+/// Which components each increment of the path holds at zero stress (its segment's).
+pub fn path_zero_stress(path: &[PathSegment]) -> Vec<[bool; 3]> {
+    path.iter()
+        .flat_map(|seg| std::iter::repeat_n(seg.zero_stress.0, seg.increments as usize))
+        .collect()
+}
+
 /// The strain at every increment of the path, in order. Segment `k` goes from the end of
 /// segment `k - 1` (zero strain for the first) to `to` in `increments` equal steps; its
 /// last point is `to` exactly, so the next segment starts from the value written in the
@@ -45,10 +52,12 @@ mod tests {
             PathSegment {
                 to: [3e-4, 0.0, -3e-4],
                 increments: 3,
+                zero_stress: Default::default(),
             },
             PathSegment {
                 to: [1e-4, 0.0, 0.0],
                 increments: 2,
+                zero_stress: Default::default(),
             },
         ];
         let p = path_points(&path);

@@ -8,7 +8,7 @@ use mesorve_core::constraint::BoundaryCondition;
 use mesorve_core::element::InterfaceQuadrature;
 use mesorve_core::geometry::{Explicit, RandomSpec};
 use mesorve_core::interface::InterfaceLawSpec;
-pub use mesorve_core::interface::{ItzSpec, LinearItzSpec, PenaltySpec};
+pub use mesorve_core::interface::{CrackSpec, ItzSpec, LinearItzSpec, PenaltySpec};
 use mesorve_core::material::{Analysis, IsotropicElastic};
 use mesorve_core::solver::{ContactStatus, Integration, Settings};
 
@@ -166,6 +166,9 @@ pub struct MaterialsSpec {
     /// A linear elastic ITZ instead (verification, compliant bonding).
     #[serde(default)]
     pub linear_itz: Option<LinearItzSpec>,
+    /// The law of cracks through the paste (`effects.paste_cracking`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub paste_crack: Option<CrackSpec>,
 }
 
 impl MaterialsSpec {
@@ -196,6 +199,11 @@ pub struct EffectsSpec {
     /// Penalty contact when a crack closes (needs `cohesive`).
     #[serde(default = "yes")]
     pub contact: bool,
+    /// Cracks through the paste: interface elements on the paste's element edges with
+    /// `materials.paste_crack`'s law (`docs/fracture.md`). Off (the default) is left out
+    /// of the scene's fingerprint, so scenes without the key keep theirs.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub paste_cracking: bool,
 }
 
 impl Default for EffectsSpec {
@@ -203,6 +211,7 @@ impl Default for EffectsSpec {
         EffectsSpec {
             cohesive: true,
             contact: true,
+            paste_cracking: false,
         }
     }
 }
@@ -278,6 +287,53 @@ pub type ContactStatusSpec = ContactStatus;
 pub struct PathSegment {
     pub to: [f64; 3],
     pub increments: u32,
+    /// Components held at zero stress along the segment (`["yy"]`: uniaxial stress in x
+    /// with `to = [eps, 0, 0]`); their strain is found (`model::mixed`), and their value in
+    /// `to` must be 0.
+    #[serde(default, skip_serializing_if = "ZeroStress::is_none")]
+    pub zero_stress: ZeroStress,
+}
+
+/// Which of `[xx, yy, xy]` a path segment holds at zero stress; in a scene, a list of
+/// their names (`["yy", "xy"]`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(try_from = "Vec<String>", into = "Vec<String>")]
+pub struct ZeroStress(pub [bool; 3]);
+
+impl ZeroStress {
+    const NAMES: [&'static str; 3] = ["xx", "yy", "xy"];
+
+    /// No component held.
+    pub fn is_none(&self) -> bool {
+        self.0 == [false; 3]
+    }
+}
+
+impl TryFrom<Vec<String>> for ZeroStress {
+    type Error = String;
+    fn try_from(names: Vec<String>) -> std::result::Result<Self, String> {
+        let mut held = [false; 3];
+        for n in names {
+            let i = Self::NAMES
+                .iter()
+                .position(|c| *c == n)
+                .ok_or_else(|| format!("`{n}` is not a stress component (xx, yy, xy)"))?;
+            held[i] = true;
+        }
+        if held == [true; 3] {
+            return Err("every component at zero stress leaves nothing to prescribe".into());
+        }
+        Ok(ZeroStress(held))
+    }
+}
+
+impl From<ZeroStress> for Vec<String> {
+    fn from(z: ZeroStress) -> Self {
+        (0..3)
+            .filter(|&i| z.0[i])
+            .map(|i| ZeroStress::NAMES[i].to_string())
+            .collect()
+    }
 }
 
 fn yes() -> bool {

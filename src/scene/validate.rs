@@ -72,7 +72,35 @@ impl SceneSpec {
                 "contact acts on ITZ elements, which need effects.cohesive = true",
             ));
         }
-        validate_interface_laws(&self.materials, self.effects.cohesive && has_inclusions)
+        validate_interface_laws(&self.materials, self.effects.cohesive && has_inclusions)?;
+        validate_paste_cracking(&self.effects, &self.materials)
+    }
+}
+
+/// Cracks through the paste need the ITZ's cohesive law beside them (the two laws share
+/// one history layout) and the paste's crack law; a crack law without the effect is
+/// refused, so that a scene says what it simulates.
+fn validate_paste_cracking(effects: &EffectsSpec, materials: &MaterialsSpec) -> Result<()> {
+    match (&materials.paste_crack, effects.paste_cracking) {
+        (Some(_), false) => Err(Error::scene(
+            "materials.paste_crack",
+            "given, but effects.paste_cracking is off: turn it on, or remove the table",
+        )),
+        (None, true) => Err(Error::scene(
+            "materials.paste_crack",
+            "missing: effects.paste_cracking is on (give { strength, fracture_energy })",
+        )),
+        (Some(crack), true) => {
+            if !effects.cohesive || materials.itz.is_none() {
+                return Err(Error::scene(
+                    "effects.paste_cracking",
+                    "cracks through the paste need effects.cohesive = true and the cohesive \
+                     ITZ law materials.itz beside them",
+                ));
+            }
+            crack.validate("paste_crack")
+        }
+        (None, false) => Ok(()),
     }
 }
 
@@ -283,6 +311,16 @@ fn validate_path(path: &[PathSegment]) -> Result<()> {
                 format!(
                     "strain components must be finite and at most {} in magnitude",
                     MAX_STRAIN
+                ),
+            ));
+        }
+        if let Some(i) = (0..3).find(|&i| seg.zero_stress.0[i] && seg.to[i] != 0.0) {
+            return Err(Error::scene(
+                format!("path[{k}].to"),
+                format!(
+                    "component {i} is held at zero stress (path[{k}].zero_stress): its strain \
+                     is found, so its value in `to` must be 0, got {}",
+                    seg.to[i]
                 ),
             ));
         }

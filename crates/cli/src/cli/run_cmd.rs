@@ -9,7 +9,8 @@ use std::time::Instant;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rve::error::{Error, Result};
-use rve::scene::path_points;
+use rve::model::mixed::update_mixed;
+use rve::scene::{path_points, path_zero_stress};
 use rve::{Instance, Model, Response, TangentRequest};
 
 use super::load_scene_with;
@@ -78,6 +79,11 @@ fn parse_frames(s: &str) -> std::result::Result<Frames, String> {
 /// Header of `response.csv`; the C driver writes the same columns.
 pub const CSV_HEADER: &str = "step,eps_xx,eps_yy,gamma_xy,sig_xx,sig_yy,sig_xy,D11,D12,D13,D21,D22,D23,D31,D32,D33,iterations,substeps,s_zz,factorizations,loading_points,unloading_points,contact_points,seconds,limit_points,held_points,fast,check_factorizations,step_too_large,error_estimate,step_ratio";
 
+/// Whether step control would have to follow a mixed-controlled segment.
+fn controlled_with_zero_stress(solver: &rve::scene::SolverSpec, zero_stress: &[[bool; 3]]) -> bool {
+    solver.step_tolerance.is_some() && zero_stress.iter().any(|z| *z != [false; 3])
+}
+
 pub fn run(args: &RunArgs) -> Result<()> {
     let (scene, name) = load_scene_with(args.scene.as_ref(), &args.set)?;
     if scene.spec.path.is_empty() {
@@ -102,13 +108,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
     outputs.create_dirs()?;
     let mut instance = Instance::new(model.clone());
     let mut ws = model.workspace();
-    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
-        let style = ProgressStyle::with_template(
-            "{bar:32} {pos}/{len} increments, {elapsed} (eta {eta})  {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
-        ProgressBar::new(points.len() as u64).with_style(style)
-    });
+    let progress = Progress::new(args.quiet, points.len());
+    let zero_stress = path_zero_stress(&scene.spec.path);
+    if controlled_with_zero_stress(&scene.spec.solver, &zero_stress) {
+        return Err(Error::scene(
+            "path",
+            "zero_stress segments are followed with the path's own increments: leave out \
+             solver.step_tolerance for them",
+        ));
+    }
     let times = step_times(&points);
     let controlled = scene.spec.solver.step_tolerance.is_some();
     let mut control = StepControl::default();
@@ -117,29 +125,21 @@ pub fn run(args: &RunArgs) -> Result<()> {
             control.follow(&mut instance, &mut ws, &mut outputs, eps, times[step])?
         } else {
             let t0 = Instant::now();
-            let r = instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
+            let (r, eps) = if zero_stress[step] == [false; 3] {
+                let r =
+                    instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
+                (r, eps)
+            } else {
+                update_mixed(&mut instance, eps, zero_stress[step], times[step], &mut ws)?
+            };
             let seconds = t0.elapsed().as_secs_f64();
             instance.commit()?;
             outputs.record(step + 1, eps, &r, seconds, instance.committed())?;
             r
         };
-        if let Some(bar) = &bar {
-            bar.set_message(format!(
-                "sig = [{:+.4} {:+.4} {:+.4}]",
-                r.stress[0], r.stress[1], r.stress[2]
-            ));
-            bar.inc(1);
-        } else if !args.quiet {
-            eprintln!(
-                "step {:4}  eps = [{:+.3e} {:+.3e} {:+.3e}]  sig = [{:+.4} {:+.4} {:+.4}]  it {} sub {}",
-                step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
-                r.report.iterations, r.report.substeps
-            );
-        }
+        progress.step(step, eps, &r);
     }
-    if let Some(bar) = &bar {
-        bar.finish();
-    }
+    progress.finish();
     if controlled && !args.quiet {
         eprintln!(
             "{name}: solver.step_tolerance: {} increments, {} redone smaller, {} kept above \
@@ -149,6 +149,49 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
     }
     outputs.finish()
+}
+
+/// `rve run`'s progress on stderr: a bar on a terminal, a line per increment otherwise,
+/// nothing when quiet.
+struct Progress {
+    bar: Option<ProgressBar>,
+    lines: bool,
+}
+
+impl Progress {
+    fn new(quiet: bool, increments: usize) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let style = ProgressStyle::with_template(
+                "{bar:32} {pos}/{len} increments, {elapsed} (eta {eta})  {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+            ProgressBar::new(increments as u64).with_style(style)
+        });
+        let lines = !quiet && bar.is_none();
+        Self { bar, lines }
+    }
+
+    fn step(&self, step: usize, eps: [f64; 3], r: &Response) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!(
+                "sig = [{:+.4} {:+.4} {:+.4}]",
+                r.stress[0], r.stress[1], r.stress[2]
+            ));
+            bar.inc(1);
+        } else if self.lines {
+            eprintln!(
+                "step {:4}  eps = [{:+.3e} {:+.3e} {:+.3e}]  sig = [{:+.4} {:+.4} {:+.4}]  it {} sub {}",
+                step + 1, eps[0], eps[1], eps[2], r.stress[0], r.stress[1], r.stress[2],
+                r.report.iterations, r.report.substeps
+            );
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish();
+        }
+    }
 }
 
 /// Smallest step `rve run` takes under `solver.step_tolerance`, as a fraction of the

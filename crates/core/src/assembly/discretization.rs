@@ -16,11 +16,12 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix3, SMatrix, SVector};
 
+use super::laws::InterfaceLaws;
 use super::pattern::{Pattern, NO_SLOT};
 use crate::constraint::{BoundaryCondition, DofMap, FIXED};
 use crate::element::{interface4, triangle, InterfaceGeometry, InterfaceQuadrature};
 use crate::error::Result;
-use crate::interface::{InterfaceLaw, TangentKind};
+use crate::interface::{Implex, InterfaceLaw, TangentKind};
 use crate::material::{Analysis, IsotropicElastic};
 use crate::mesh::{InterfaceElement, Mesh, Phase};
 
@@ -57,9 +58,9 @@ pub struct Discretization {
     pub bulk: Vec<BulkElement>,
     pub interfaces: Vec<InterfaceGeometry>,
     pub interface_dofs: Vec<[u32; 8]>,
-    /// The interface law; `None` when the scene has no ITZ (then there are no interface
+    /// The interface laws; `None` when the scene has no ITZ (then there are no interface
     /// elements).
-    pub law: Option<Arc<dyn InterfaceLaw>>,
+    pub law: Option<InterfaceLaws>,
     pub quadrature: InterfaceQuadrature,
     pub pattern: Pattern,
     /// Values of `K_const` on the pattern.
@@ -75,7 +76,10 @@ pub struct DiscretizationSpec {
     pub analysis: Analysis,
     pub matrix: IsotropicElastic,
     pub aggregate: IsotropicElastic,
+    /// The ITZ's law (`None`: no interface elements).
     pub law: Option<Arc<dyn InterfaceLaw>>,
+    /// The law of cracks through the paste, for the mesh's paste interface elements.
+    pub paste_law: Option<Arc<dyn InterfaceLaw>>,
     pub quadrature: InterfaceQuadrature,
     pub boundary: BoundaryCondition,
 }
@@ -110,6 +114,17 @@ impl Discretization {
         } else {
             (Vec::new(), Vec::new())
         };
+        let law = match &spec.law {
+            Some(itz) => {
+                let kinds = mesh.interfaces.iter().map(|e| e.kind).collect();
+                Some(InterfaceLaws::new(
+                    itz.clone(),
+                    spec.paste_law.clone(),
+                    kinds,
+                )?)
+            }
+            None => None,
+        };
         let triangle_dofs: Vec<[u32; 6]> = bulk.iter().map(|e| e.dofs).collect();
         let pattern = Pattern::build(&dofs, &triangle_dofs, &interface_dofs)?;
 
@@ -142,7 +157,7 @@ impl Discretization {
             bulk,
             interfaces,
             interface_dofs,
-            law: spec.law.clone(),
+            law,
             quadrature: spec.quadrature,
             pattern,
             k_const,
@@ -161,11 +176,11 @@ impl Discretization {
         self.quadrature.num_points()
     }
 
-    /// History values per interface element (points x the law's values per point).
+    /// History values per interface element (points x the laws' values per point).
     fn history_per_interface(&self) -> usize {
         self.law
             .as_ref()
-            .map_or(0, |law| self.points_per_interface() * law.history_len())
+            .map_or(0, |laws| self.points_per_interface() * laws.history_len())
     }
 
     /// Length of the flat interface history (elements x points x values per point).
@@ -176,15 +191,16 @@ impl Discretization {
     /// Whether some interface point passes the peak of its law between the histories
     /// `start` and `trial` (see [`InterfaceLaw::passes_peak`]).
     pub fn passes_peak(&self, start: &[f64], trial: &[f64]) -> bool {
-        let Some(law) = &self.law else {
+        let Some(laws) = &self.law else {
             return false;
         };
-        let hl = law.history_len();
+        let (hl, np) = (laws.history_len(), self.points_per_interface());
         hl > 0
             && start
                 .chunks_exact(hl)
                 .zip(trial.chunks_exact(hl))
-                .any(|(s, t)| law.passes_peak(s, t))
+                .enumerate()
+                .any(|(q, (s, t))| laws.of(q / np).passes_peak(s, t))
     }
 
     /// Gathers the element vector of `dofs` from the unknowns `x` (fixed dofs are zero).
@@ -227,19 +243,20 @@ impl Discretization {
     /// returns how many are closed. All open without a law that has a contact status.
     pub fn contact_status(&self, x: &[f64], closed: &mut [bool]) -> usize {
         closed.fill(false);
-        let Some(law) = self.law.as_deref().filter(|l| l.has_contact_status()) else {
+        let Some(laws) = self.law.as_ref().filter(|l| l.has_contact_status()) else {
             return 0;
         };
         let np = self.points_per_interface();
         let mut count = 0;
-        for ((geometry, dofs), out) in self
+        for (e, ((geometry, dofs), out)) in self
             .interfaces
             .iter()
             .zip(&self.interface_dofs)
             .zip(closed.chunks_exact_mut(np))
+            .enumerate()
         {
             let u = Self::gather(x, dofs);
-            let st = interface4::contact_status(geometry, self.quadrature, law, &u);
+            let st = interface4::contact_status(geometry, self.quadrature, laws.of(e), &u);
             out.copy_from_slice(&st[..np]);
             count += st[..np].iter().filter(|&&c| c).count();
         }
@@ -298,7 +315,7 @@ impl Discretization {
             branch_signature: FNV_OFFSET,
             ..Default::default()
         };
-        let Some(law) = self.law.as_deref() else {
+        let Some(laws) = self.law.as_ref() else {
             return counts;
         };
         let per_element = self.history_per_interface();
@@ -309,7 +326,7 @@ impl Discretization {
             let resp = interface4::evaluate_with(
                 geometry,
                 self.quadrature,
-                law,
+                laws.of(e),
                 &committed[range.clone()],
                 &u,
                 &mut trial[range],
@@ -341,18 +358,15 @@ impl Discretization {
 
 impl Discretization {
     /// The stiffness values `K = K_const + K_itz` on the pattern with every interface
-    /// point on a fixed linear branch: `frozen_law` answers `t = S delta` with the
-    /// per-point history `frozen` and contact status `closed` (one entry per point,
-    /// element-major); see [`crate::interface::Implex`]. No interface: `K_const`.
-    /// Allocates nothing.
-    pub fn frozen_stiffness(
-        &self,
-        frozen_law: &dyn InterfaceLaw,
-        frozen: &[f64],
-        closed: &[bool],
-        k: &mut [f64],
-    ) {
+    /// point on a fixed linear branch: each element's law answers on its frozen branch
+    /// (`t = S delta`, [`crate::interface::Implex`]) with the per-point history `frozen`
+    /// and contact status `closed` (one entry per point, element-major). No interface:
+    /// `K_const`. Allocates nothing.
+    pub fn frozen_stiffness(&self, frozen: &[f64], closed: &[bool], k: &mut [f64]) {
         k.copy_from_slice(&self.k_const);
+        let Some(laws) = self.law.as_ref() else {
+            return;
+        };
         let per_element = self.history_per_interface();
         let np = self.points_per_interface();
         let mut scratch = [0.0; 64];
@@ -362,7 +376,7 @@ impl Discretization {
             let resp = interface4::evaluate_with(
                 geometry,
                 self.quadrature,
-                frozen_law,
+                &Implex { law: laws.of(e) },
                 &frozen[e * per_element..(e + 1) * per_element],
                 &zero,
                 trial,

@@ -77,11 +77,15 @@ impl DofMap {
                 for &n in &b.corners {
                     fix(&mut master, n);
                 }
-                for (&l, &r) in b.left.iter().zip(&b.right) {
-                    master[r] = l;
-                }
-                for (&bo, &t) in b.bottom.iter().zip(&b.top) {
-                    master[t] = bo;
+                if b.periodic_ties.is_empty() {
+                    for (&l, &r) in b.left.iter().zip(&b.right) {
+                        master[r] = l;
+                    }
+                    for (&bo, &t) in b.bottom.iter().zip(&b.top) {
+                        master[t] = bo;
+                    }
+                } else {
+                    tie(&mut master, &b.periodic_ties);
                 }
             }
             BoundaryCondition::Minimal => fix(&mut master, b.corners[0]),
@@ -135,6 +139,32 @@ impl DofMap {
             out[2 * k + 1] = self.reduced[2 * n + 1];
         }
         out
+    }
+}
+
+/// Ties the nodes of every `(slave, master)` pair and of their chains to one master, the
+/// lowest node of its class (a copy may be tied to two copies of the opposite side, which
+/// are then tied to each other).
+fn tie(master: &mut [usize], ties: &[(usize, usize)]) {
+    fn root(m: &[usize], mut i: usize) -> usize {
+        while m[i] != i {
+            i = m[i];
+        }
+        i
+    }
+    for &(a, b) in ties {
+        if master[a] == usize::MAX || master[b] == usize::MAX {
+            continue;
+        }
+        let (ra, rb) = (root(master, a), root(master, b));
+        if ra != rb {
+            master[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    for i in 0..master.len() {
+        if master[i] != usize::MAX {
+            master[i] = root(master, i);
+        }
     }
 }
 

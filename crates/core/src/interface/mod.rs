@@ -1,7 +1,9 @@
-//! Constitutive laws of the zero-thickness interfaces (ITZ), behind the [`InterfaceLaw`]
-//! trait: the paper's cohesive-contact law and a linear elastic interface.
+//! Constitutive laws of the zero-thickness interfaces, behind the [`InterfaceLaw`] trait:
+//! the paper's cohesive-contact law of the ITZ, a linear elastic interface, and the law of
+//! a crack through the paste (stiff to its strength, then Hordijk's softening).
 
 mod cohesive;
+mod crack;
 mod implex;
 mod law;
 mod linear;
@@ -9,6 +11,7 @@ mod linear;
 pub use cohesive::{CohesiveHistory, CohesivePoint};
 pub use cohesive::{CohesiveLaw, ContactShear, Penalty};
 pub use cohesive::{ItzSpec, PenaltySpec};
+pub use crack::{CrackLaw, CrackSpec, STIFFNESS_FACTOR};
 pub use implex::Implex;
 pub use law::{Branch, InterfaceLaw, InterfaceLawSpec, LawPoint, PointMeasures, TangentKind};
 pub use linear::LinearInterface;

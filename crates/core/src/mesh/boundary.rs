@@ -126,5 +126,6 @@ fn boundary_nodes(
         bottom,
         top,
         sides_match,
+        periodic_ties: Vec::new(),
     })
 }

@@ -19,7 +19,7 @@
 use std::collections::HashMap;
 
 use super::boundary::{find_boundary_nodes, find_boundary_nodes_split};
-use super::model::{InterfaceElement, Mesh, Phase, PhaseMesh, Triangle};
+use super::model::{InterfaceElement, InterfaceKind, Mesh, Phase, PhaseMesh, Triangle};
 use crate::error::{Error, Result};
 
 /// Builds the mesh without interface elements (perfect bonding).
@@ -54,6 +54,7 @@ pub fn insert_itz(phase_mesh: PhaseMesh, width: f64, height: f64) -> Result<Mesh
                 length,
                 tangent,
                 normal: [tangent[1], -tangent[0]],
+                kind: InterfaceKind::Itz,
             }
         })
         .collect();

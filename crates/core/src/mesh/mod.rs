@@ -1,6 +1,8 @@
-//! Meshes: the data model, triangulation of a microstructure, Gmsh import, ITZ insertion.
+//! Meshes: the data model, triangulation of a microstructure, Gmsh import, the insertion
+//! of interface elements on the ITZ (and along the paste's edges: cracks).
 
 mod boundary;
+mod cracks;
 pub mod gmsh;
 mod itz;
 mod model;
@@ -8,9 +10,12 @@ mod stats;
 mod triangulate;
 
 pub use boundary::{find_boundary_nodes, find_boundary_nodes_split};
+pub use cracks::insert_cracks;
 pub use itz::{insert_itz, without_itz};
 pub use model::BoundaryNodes;
-pub use model::{InterfaceElement, Mesh, Microstructure, Phase, PhaseMesh, Triangle};
+pub use model::{
+    InterfaceElement, InterfaceKind, Mesh, Microstructure, Phase, PhaseMesh, Triangle,
+};
 pub use stats::triangle_angles_deg;
 pub use stats::MeshStats;
 pub use triangulate::{triangulate, triangulate_straight_interface};

@@ -60,6 +60,18 @@ pub struct InterfaceElement {
     pub tangent: [f64; 2],
     /// Unit normal `n = (s_y, -s_x)`, out of the inclusion.
     pub normal: [f64; 2],
+    /// What the element is: the ITZ, or a crack through the paste.
+    pub kind: InterfaceKind,
+}
+
+/// Where an interface element sits, which selects its law.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum InterfaceKind {
+    /// Between an aggregate and the paste (side A the aggregate).
+    #[default]
+    Itz,
+    /// Between two paste triangles (side A the one of lower index).
+    Paste,
 }
 
 /// Nodes on the cell boundary, sorted along each side, for boundary conditions.
@@ -76,6 +88,10 @@ pub struct BoundaryNodes {
     pub top: Vec<usize>,
     /// True when opposite sides carry the same number of nodes at matching positions.
     pub sides_match: bool,
+    /// Periodic ties `(slave, master)` of a mesh whose side nodes have several copies
+    /// (cracks through the paste, `super::cracks`); empty: `right[k]` is tied to
+    /// `left[k]` and `top[k]` to `bottom[k]`.
+    pub periodic_ties: Vec<(usize, usize)>,
 }
 
 /// A conforming RVE mesh with ITZ interface elements inserted.

@@ -59,8 +59,8 @@ pub(super) fn configure(problem: &Problem, ws: &mut Workspace) {
         && problem
             .disc
             .law
-            .as_deref()
-            .is_some_and(|law| law.has_contact_status());
+            .as_ref()
+            .is_some_and(|laws| laws.has_contact_status());
 }
 
 /// Holds the status the converged state `start` is in equilibrium with: its gaps' status

@@ -65,13 +65,13 @@ fn component(a: &[f32], strain: &Strain) -> (f64, f64) {
 /// and fast data `linear` at `strain`: every interface point provably stays on its linear
 /// branch (see the module docs). Allocates nothing.
 pub fn answers(problem: &Problem, history: &[f64], linear: &LinearBranch, strain: &Strain) -> bool {
-    let Some(law) = problem.disc.law.as_deref() else {
+    let Some(laws) = problem.disc.law.as_ref() else {
         return false;
     };
     if !problem.settings.fast_path || !linear.valid {
         return false;
     }
-    let hl = law.history_len();
+    let (hl, np) = (laws.history_len(), problem.disc.points_per_interface());
     linear
         .jumps
         .chunks_exact(JUMP_OPERATOR_LEN)
@@ -80,7 +80,8 @@ pub fn answers(problem: &Problem, history: &[f64], linear: &LinearBranch, strain
         .all(|(q, (a, &closed))| {
             let (s, es) = component(&a[..3], strain);
             let (n, en) = component(&a[3..], strain);
-            law.stays_linear(&history[q * hl..(q + 1) * hl], [s, n], [es, en], closed)
+            laws.of(q / np)
+                .stays_linear(&history[q * hl..(q + 1) * hl], [s, n], [es, en], closed)
         })
 }
 
@@ -107,9 +108,10 @@ pub fn build(
     ws: &mut Workspace,
 ) {
     state.linear.invalidate();
-    let Some(law) = problem.disc.law.as_deref() else {
+    let Some(laws) = problem.disc.law.as_ref() else {
         return;
     };
+    let np = problem.disc.points_per_interface();
     let exact_kg = ws.factorization.factorizes(&ws.current.k) && ws.factorization.kg_is_of_factor();
     if !problem.settings.fast_path || ws.current.counts.loading > 0 || !exact_kg {
         return;
@@ -120,9 +122,9 @@ pub fn build(
     linear.closed.resize(points, false);
     jump_operators(problem, ws.factorization.kg(), &mut linear.jumps);
     let closed = &mut linear.closed;
-    problem
-        .disc
-        .for_each_jump(&state.unknowns, |q, jump| closed[q] = law.is_closed(jump));
+    problem.disc.for_each_jump(&state.unknowns, |q, jump| {
+        closed[q] = laws.of(q / np).is_closed(jump)
+    });
     // `K_b` was assembled with the held contact status: it must be the gaps' (no point
     // held against its gap, see `contact`).
     if ws
@@ -176,8 +178,8 @@ pub fn materialize(
     let status = problem
         .disc
         .law
-        .as_deref()
-        .is_some_and(|law| law.has_contact_status())
+        .as_ref()
+        .is_some_and(|laws| laws.has_contact_status())
         .then_some(state.linear.closed.as_slice());
     problem.evaluate_into(
         &state.unknowns,

@@ -40,7 +40,6 @@ use super::problem::{Problem, Strain};
 use super::settings::IncrementReport;
 use super::workspace::{FactorUse, Workspace};
 use crate::error::{Error, Result};
-use crate::interface::Implex;
 use crate::state::{held_contact_words, LinearBranch, State, JUMP_OPERATOR_LEN};
 
 /// Whether the step kept in `committed.linear` (the step that led to `committed`) is the
@@ -94,19 +93,22 @@ pub fn factorize_step(
     ws: &mut Workspace,
 ) -> Result<[f64; 9]> {
     let disc = problem.disc;
-    if let Some(law) = disc.law.as_deref() {
+    if let Some(laws) = disc.law.as_ref() {
         let previous = extrapolated_from(&committed.history, &committed.implex.previous);
-        law.extrapolate(&committed.history, previous, ratio, &mut ws.history_start);
+        let per_element = laws.history_len() * disc.points_per_interface();
+        for e in 0..disc.interfaces.len() {
+            let range = e * per_element..(e + 1) * per_element;
+            laws.of(e).extrapolate(
+                &committed.history[range.clone()],
+                &previous[range.clone()],
+                ratio,
+                &mut ws.history_start[range],
+            );
+        }
         for (q, closed) in ws.contact.start.iter_mut().enumerate() {
             *closed = committed.implex.is_closed(q);
         }
-        let frozen = Implex { law };
-        disc.frozen_stiffness(
-            &frozen,
-            &ws.history_start,
-            &ws.contact.start,
-            &mut ws.current.k,
-        );
+        disc.frozen_stiffness(&ws.history_start, &ws.contact.start, &mut ws.current.k);
     } else {
         ws.current.k.copy_from_slice(&disc.k_const);
     }
@@ -176,16 +178,17 @@ pub fn finish_step(
         answer: super::Answer::Solved,
         ..Default::default()
     };
-    let Some(law) = problem.disc.law.as_deref() else {
+    let Some(laws) = problem.disc.law.as_ref() else {
         trial.implex.closed.clear();
         return report;
     };
-    let (hl, np) = (law.history_len(), problem.disc.points_per_interface());
+    let (hl, np) = (laws.history_len(), problem.disc.points_per_interface());
     let points = problem.disc.interface_points();
     trial.implex.closed.clear();
     trial.implex.closed.resize(held_contact_words(points), 0);
     let linear = &trial.linear;
     for q in 0..points {
+        let law = laws.of(q / np);
         let jump = point_jump(linear, q, strain);
         let closed = law.is_closed(jump);
         let range = q * hl..(q + 1) * hl;
@@ -218,10 +221,10 @@ pub fn stays_still(
     linear: &LinearBranch,
     strain: &Strain,
 ) -> bool {
-    let Some(law) = problem.disc.law.as_deref() else {
+    let Some(laws) = problem.disc.law.as_ref() else {
         return true;
     };
-    let (hl, np) = (law.history_len(), problem.disc.points_per_interface());
+    let (hl, np) = (laws.history_len(), problem.disc.points_per_interface());
     let mut stack = [0.0; 8];
     let mut heap = Vec::new();
     let trial: &mut [f64] = if hl <= stack.len() {
@@ -231,6 +234,7 @@ pub fn stays_still(
         &mut heap
     };
     (0..problem.disc.interface_points()).all(|q| {
+        let law = laws.of(q / np);
         let jump = point_jump(linear, q, strain);
         let closed = law.is_closed(jump);
         let range = q * hl..(q + 1) * hl;
@@ -287,17 +291,19 @@ pub fn error_estimate(
     ratio: f64,
     strain: &Strain,
 ) -> f64 {
-    let Some(law) = problem.disc.law.as_deref() else {
+    let Some(laws) = problem.disc.law.as_ref() else {
         return 0.0;
     };
     let disc = problem.disc;
-    let (hl, np) = (law.history_len(), disc.points_per_interface());
+    let (hl, np) = (laws.history_len(), disc.points_per_interface());
     let previous = extrapolated_from(&committed.history, &committed.implex.previous);
     // Every law with a frozen branch keeps one value per point (the cohesive law's delta_max).
     let mut extrapolated = [0.0; 16];
     let h_ex = &mut extrapolated[..hl];
-    let (mut error, scale): (f64, f64) = (0.0, law.traction_scale());
+    let mut error = 0.0f64;
     for q in 0..disc.interface_points() {
+        let law = laws.of(q / np);
+        let scale = law.traction_scale();
         let range = q * hl..(q + 1) * hl;
         law.extrapolate(
             &committed.history[range.clone()],

@@ -446,7 +446,7 @@ impl Increment<'_, '_> {
 /// paper's contact law read at every evaluation, that closed points can leave the RVE
 /// without equilibrium; with the status held that does not apply).
 fn failure_hint(problem: &Problem, target: &Strain, trial: &State, ws: &mut Workspace) -> String {
-    let Some(law) = problem.disc.law.as_deref() else {
+    let Some(laws) = problem.disc.law.as_ref() else {
         return String::new();
     };
     if contact::held(ws) {
@@ -464,5 +464,5 @@ fn failure_hint(problem: &Problem, target: &Strain, trial: &State, ws: &mut Work
         &mut out.r,
         None,
     );
-    law.failure_hint(counts.contact).unwrap_or_default()
+    laws.itz().failure_hint(counts.contact).unwrap_or_default()
 }
