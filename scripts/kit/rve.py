@@ -37,7 +37,10 @@ RVE = os.path.join(ROOT, "target", "release", "rve")
 # TOML of its own.
 def toml_value(v):
     """A Python value as a TOML value: `0.5`, `true`, `"lu"`, `[1, 2]`, `{ to = [...] }`.
-    Floats are written with `repr`, which reads back to the same double."""
+    Floats are written with `repr`, which reads back to the same double. `None` is the
+    empty value, with which `--set KEY=` removes the key."""
+    if v is None:
+        return ""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, str):
@@ -60,7 +63,8 @@ def toml_key(k):
 def set_args(edits):
     """`rve`'s `--set KEY=VALUE` arguments for the dotted keys of `edits`
     ("geometry.seed": 11, "materials.itz.penalty.lambda_p": 1e7, "path.0.increments": 40
-    for the first `[[path]]`, "path": [{...}] for a new path). Missing tables are created;
+    for the first `[[path]]`, "path": [{...}] for a new path, None to remove a key). Missing
+    tables are created;
     the scene's validation refuses a misspelt key."""
     return [a for key, value in (edits or {}).items() for a in ("--set", f"{key}={toml_value(value)}")]
 

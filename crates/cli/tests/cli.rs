@@ -322,3 +322,43 @@ fn mesh_and_info_set_equal_the_edited_scene() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("integraton"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `--set KEY=` removes the key: the failing scene without its paste cracks meshes the
+/// ITZ alone, as the same cell without the table does; a key that is not there is refused.
+#[test]
+fn set_with_no_value_removes_the_key() {
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = rve(args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let fracture = common::repo("scenes/concrete_fracture.toml");
+    let fracture = fracture.to_str().unwrap();
+    let whole = json(&["mesh", fracture, "--json"]);
+    let itz_only = json(&[
+        "mesh",
+        fracture,
+        "--set",
+        "effects.paste_cracking=false",
+        "--set",
+        "materials.paste_crack=",
+        "--json",
+    ]);
+    assert!(
+        whole["interface_elements"].as_u64() > itz_only["interface_elements"].as_u64(),
+        "{whole} against {itz_only}"
+    );
+    // The same geometry and mesh keys as the host scene, whose cell has the ITZ alone.
+    let host = common::repo("scenes/paper_rve_host_implex.toml");
+    let host = json(&["mesh", host.to_str().unwrap(), "--json"]);
+    for key in ["nodes", "triangles", "interface_elements"] {
+        assert_eq!(itz_only[key], host[key], "{key}");
+    }
+    let out = rve(&["mesh", fracture, "--set", "materials.paste_crak="]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no such key to remove"));
+}

@@ -95,10 +95,13 @@ fn child<'a>(node: &'a mut toml::Value, part: &str) -> Option<&'a mut toml::Valu
     }
 }
 
-/// Applies one `KEY=VALUE` of `--set` to `table`.
+/// Applies one `KEY=VALUE` of `--set` to `table`; `KEY=` (no value) removes the key.
 fn set_key(table: &mut toml::Table, set: &str) -> Result<()> {
     let bad = |why: &str| Error::SceneParse(format!("--set {set}: {why}"));
     let (key, text) = set.split_once('=').ok_or_else(|| bad("not KEY=VALUE"))?;
+    if text.trim().is_empty() {
+        return remove_key(table, key.trim()).ok_or_else(|| bad("no such key to remove"));
+    }
     let value = format!("v = {}", text.trim())
         .parse::<toml::Table>()
         .ok()
@@ -129,6 +132,19 @@ fn set_key(table: &mut toml::Table, set: &str) -> Result<()> {
         _ => return Err(bad("the key goes through a value that is not a table")),
     }
     Ok(())
+}
+
+/// Removes the dotted `key` (tables only); `None` when it is not there.
+fn remove_key(table: &mut toml::Table, key: &str) -> Option<()> {
+    let (parents, leaf) = match key.rsplit_once('.') {
+        Some((parents, leaf)) => (Some(parents), leaf),
+        None => (None, key),
+    };
+    let mut node = table;
+    for part in parents.into_iter().flat_map(|p| p.split('.')) {
+        node = node.get_mut(part)?.as_table_mut()?;
+    }
+    node.remove(leaf).map(|_| ())
 }
 
 /// Entry point of the `rve` binary; returns the process exit code.
