@@ -255,3 +255,82 @@ fn kept_steps_change_nothing_over_the_cycle() {
         "unloading and compression carry over"
     );
 }
+
+/// The micro fields of a state whose step was carried over (its unknowns formed at an
+/// earlier increment) are rebuilt from the step's frozen branches: on the cycle, every
+/// committed state's displacements equal those of a run that factorizes every step, to
+/// round-off. And a mixed-control trial that reused its step at another strain forms its
+/// unknowns after `Instance::refactor_step`, with the same answer.
+#[test]
+fn carried_states_give_the_fields_of_their_step() {
+    let (kept, points) = model(&cycle_text(true, 1, true));
+    let (fresh, _) = model(&cycle_text(true, 1, false));
+    let (mut a, mut b) = (Instance::new(kept.clone()), Instance::new(fresh.clone()));
+    let (mut wa, mut wb) = (kept.workspace(), fresh.workspace());
+    let (mut previous, mut rebuilt) = ([0.0; 3], 0);
+    for (k, &eps) in points.iter().enumerate() {
+        let dt = (0..3)
+            .map(|c| (eps[c] - previous[c]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        previous = eps;
+        let request = TangentRequest::Consistent;
+        a.update_timed(eps, dt, &mut wa, request).unwrap();
+        b.update_timed(eps, dt, &mut wb, request).unwrap();
+        a.commit().unwrap();
+        b.commit().unwrap();
+        rebuilt += usize::from(!a.committed().unknowns_are_current());
+        let (fa, fb) = (
+            kept.fields(a.committed()).unwrap(),
+            fresh.fields(b.committed()).unwrap(),
+        );
+        let scale = fb
+            .displacement
+            .iter()
+            .fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
+        for (ua, ub) in fa.displacement.iter().zip(&fb.displacement) {
+            for c in 0..2 {
+                assert!(
+                    (ua[c] - ub[c]).abs() <= 1e-10 * scale,
+                    "increment {k}: {ua:?} against {ub:?}"
+                );
+            }
+        }
+    }
+    eprintln!(
+        "{rebuilt} of {} states rebuilt from their step",
+        points.len()
+    );
+    assert!(rebuilt > 8, "too few carried states to check: {rebuilt}");
+
+    // A repeated trial at another strain of the step lags; refactor_step forms it.
+    let mut c = Instance::new(kept.clone());
+    let mut ws = kept.workspace();
+    let request = TangentRequest::Consistent;
+    for &eps in &points[..21] {
+        c.update_timed(eps, 1.0, &mut ws, request).unwrap();
+        c.commit().unwrap();
+    }
+    let next = points[21];
+    let nearby = next.map(|e| 0.9 * e);
+    c.update_timed(nearby, 1.0, &mut ws, request).unwrap();
+    let lagging = c.update_timed(next, 1.0, &mut ws, request).unwrap();
+    assert_eq!(lagging.report.factorizations, 0, "the step is reused");
+    assert!(!c.trial_unknowns_are_current());
+    c.refactor_step();
+    let formed = c.update_timed(next, 1.0, &mut ws, request).unwrap();
+    assert_eq!(formed.report.factorizations, 1);
+    assert!(c.trial_unknowns_are_current());
+    let close = |x: &[f64], y: &[f64]| {
+        x.iter()
+            .zip(y)
+            .all(|(p, q)| (p - q).abs() <= 1e-9 * (1.0 + q.abs()))
+    };
+    assert!(
+        close(&formed.stress, &lagging.stress),
+        "{:?} against {:?}",
+        formed.stress,
+        lagging.stress
+    );
+    assert!(close(&formed.tangent, &lagging.tangent));
+}

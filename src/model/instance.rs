@@ -60,6 +60,8 @@ pub struct Instance {
     /// (`solver::implex::carries_over`): the committed state no longer holds it, and a
     /// later step of the same committed state (a cut-back) carries it again.
     carried: bool,
+    /// The next IMPL-EX update factorizes its own step ([`Self::refactor_step`]).
+    refactor: bool,
     /// The trial awaiting commit or revert, if any.
     pending: Pending,
     /// The response of the pending trial, for a repeated call.
@@ -114,6 +116,7 @@ impl Instance {
             lean_core: None,
             parked: false,
             carried: false,
+            refactor: false,
             pending: Pending::Nothing,
             last: None,
             fast_updates: 0,
@@ -175,7 +178,11 @@ impl Instance {
         ws: &mut Workspace,
         request: TangentRequest,
     ) -> Result<Response> {
-        if let Some(response) = self.repeated(strain, dt, request) {
+        let refactor = std::mem::take(&mut self.refactor);
+        if let Some(response) = (!refactor)
+            .then(|| self.repeated(strain, dt, request))
+            .flatten()
+        {
             self.unpark();
             self.fast_updates += 1;
             return Ok(response);
@@ -183,7 +190,7 @@ impl Instance {
         self.pending = Pending::Nothing;
         self.last = None;
         let mut response = if self.model.solver.integration == Integration::Implex {
-            self.implex(strain, dt, ws, request, false)?
+            self.implex(strain, dt, ws, request, refactor)?
         } else {
             self.implicit(strain, ws, request)?
         };
@@ -585,6 +592,22 @@ impl Instance {
             }
             _ => None,
         }
+    }
+
+    /// Whether the pending trial holds its unknowns at its own strain (an IMPL-EX step
+    /// reused at another strain of it, or a fast update, leaves them at the other one);
+    /// `true` without a trial.
+    pub fn trial_unknowns_are_current(&self) -> bool {
+        self.trial_state()
+            .is_none_or(|state| state.unknowns_are_current())
+    }
+
+    /// The next IMPL-EX update factorizes its step again (or carries the committed one
+    /// over) instead of reusing the pending trial's, so that it forms its unknowns at its
+    /// own strain: for outputs after a trial whose unknowns lag
+    /// ([`Self::trial_unknowns_are_current`]). The same answer, at one factorization.
+    pub fn refactor_step(&mut self) {
+        self.refactor = true;
     }
 
     /// Replaces the committed state by the one `core` stands for (`None`: virgin), rebuilt

@@ -385,20 +385,23 @@ impl Model {
         if state.unknowns_are_current() {
             return Ok(Cow::Borrowed(state));
         }
+        let mut ws = self.workspace();
+        let mut out = self.new_state();
         if self.solver.integration == Integration::Implex {
-            // The fluctuation of an IMPL-EX state is `X_ex eps` with the step's frozen
-            // branches, which the committed state no longer holds.
+            // The fluctuation of an IMPL-EX state is `X_ex eps` with its step's frozen
+            // branches: rebuilt when the step extrapolated no growth.
+            if implex::materialize(&self.problem(), state, &mut out, &mut ws)? {
+                return Ok(Cow::Owned(out));
+            }
             return Err(Error::Solve {
-                reason: "the fluctuation of this IMPL-EX state was formed at an earlier \
-                         iteration of its step and cannot be formed again; write outputs \
-                         after an update that factorized its step"
+                reason: "the fluctuation of this IMPL-EX state was formed at another strain of \
+                         a step that extrapolated the history's growth, which the state no \
+                         longer holds; write outputs after an update that factorized its step"
                     .into(),
                 depth: 0,
                 suggested_step_ratio: 1.0,
             });
         }
-        let mut ws = self.workspace();
-        let mut out = self.new_state();
         fast_path::materialize(&self.problem(), state, &mut out, &mut ws)?;
         Ok(Cow::Owned(out))
     }

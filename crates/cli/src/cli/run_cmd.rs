@@ -130,7 +130,18 @@ pub fn run(args: &RunArgs) -> Result<()> {
                     instance.update_timed(eps, times[step], &mut ws, TangentRequest::Consistent)?;
                 (r, eps)
             } else {
-                update_mixed(&mut instance, eps, zero_stress[step], times[step], &mut ws)?
+                let (r, eps) =
+                    update_mixed(&mut instance, eps, zero_stress[step], times[step], &mut ws)?;
+                if outputs.needs_fields() && !instance.trial_unknowns_are_current() {
+                    // The mixed iterations reused the step at another strain: form it at
+                    // this one for --vtk and --svg.
+                    instance.refactor_step();
+                    let request = TangentRequest::Consistent;
+                    let again = instance.update_timed(eps, times[step], &mut ws, request)?;
+                    (again, eps)
+                } else {
+                    (r, eps)
+                }
             };
             let seconds = t0.elapsed().as_secs_f64();
             instance.commit()?;
@@ -304,6 +315,11 @@ impl<'a> Outputs<'a> {
             kept: None,
             series: Vec::new(),
         })
+    }
+
+    /// Whether `--vtk` or `--svg` write the RVE's fields.
+    fn needs_fields(&self) -> bool {
+        self.args.vtk.is_some() || self.args.svg.is_some()
     }
 
     /// Creates the `--vtk` and `--svg` directories, and checks that the increments of

@@ -124,6 +124,52 @@ pub fn factorize_step(
     Ok(super::tangent::condensed(g, ws.factorization.kg(), None))
 }
 
+/// Writes into `out` the IMPL-EX `state` with its unknowns at its own strain, `X eps`, when
+/// its step can be rebuilt from it: a step that extrapolated no growth (`implex.at_start`,
+/// as every carried-over step), whose frozen branches are the history it started from
+/// (`implex.previous`) and the held contact status (`linear.closed`). Factorizes once (the
+/// workspace's factors are overwritten). `Ok(false)` when the step extrapolated a growth,
+/// which the state no longer holds. For outputs, not for the hot path.
+pub fn materialize(
+    problem: &Problem,
+    state: &State,
+    out: &mut State,
+    ws: &mut Workspace,
+) -> Result<bool> {
+    out.copy_solution_from(state);
+    if state.unknowns_are_current() {
+        return Ok(true);
+    }
+    let disc = problem.disc;
+    let implex = &state.implex;
+    let points = disc.interface_points();
+    if !implex.at_start || implex.previous.len() != state.history.len() {
+        return Ok(false);
+    }
+    if disc.law.is_some() {
+        if state.linear.closed.len() < points {
+            return Ok(false);
+        }
+        ws.contact.start[..points].copy_from_slice(&state.linear.closed[..points]);
+        disc.frozen_stiffness(&implex.previous, &ws.contact.start, &mut ws.current.k);
+    } else {
+        ws.current.k.copy_from_slice(&disc.k_const);
+    }
+    problem
+        .factorize(ws, FactorUse::OneUse)
+        .map_err(|e| Error::Solve {
+            reason: format!("singular RVE tangent on the IMPL-EX step's frozen branches ({e})"),
+            depth: 0,
+            suggested_step_ratio: 0.5,
+        })?;
+    ws.factorization.solve_g(problem.linear, &disc.g);
+    let (n, kg, strain) = (problem.n(), ws.factorization.kg(), state.strain);
+    for (i, x) in out.unknowns.iter_mut().enumerate() {
+        *x = -(kg[i] * strain[0] + kg[n + i] * strain[1] + kg[2 * n + i] * strain[2]);
+    }
+    Ok(true)
+}
+
 /// Keeps the step of [`factorize_step`] in `trial.linear`: `D_ex` (`tangent`), the `s_zz`
 /// row, every point's jump operator `A_q` and the held contact status; writes the
 /// fluctuation `X eps` at `strain` into `trial.unknowns`.
