@@ -56,9 +56,9 @@ module rve
   ! PATCH, RVE_ABI_VERSION; renamed where Fortran's case-insensitive names would clash
   ! with the functions rve_version and rve_abi_version). A host must not use a library
   ! whose rve_abi_version() differs from RVE_MODULE_ABI_VERSION.
-  character(len=*), parameter, public :: RVE_MODULE_VERSION = "0.3.0"
+  character(len=*), parameter, public :: RVE_MODULE_VERSION = "0.4.0"
   integer(c_int32_t), parameter, public :: RVE_VERSION_MAJOR = 0
-  integer(c_int32_t), parameter, public :: RVE_VERSION_MINOR = 3
+  integer(c_int32_t), parameter, public :: RVE_VERSION_MINOR = 4
   integer(c_int32_t), parameter, public :: RVE_VERSION_PATCH = 0
   integer(c_int32_t), parameter, public :: RVE_MODULE_ABI_VERSION = 0
 

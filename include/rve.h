@@ -15,9 +15,9 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-#define RVE_VERSION "0.3.0"
+#define RVE_VERSION "0.4.0"
 #define RVE_VERSION_MAJOR 0
-#define RVE_VERSION_MINOR 3
+#define RVE_VERSION_MINOR 4
 #define RVE_VERSION_PATCH 0
 /* ABI version: the soname suffix; bumped on any incompatible change. */
 #define RVE_ABI_VERSION 0

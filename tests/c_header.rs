@@ -38,7 +38,7 @@ fn header_version_macros_match_cargo_toml() {
 fn version_functions_agree() {
     let v = unsafe { std::ffi::CStr::from_ptr(rve::ffi::rve_version()) };
     assert_eq!(v.to_str().unwrap(), rve::VERSION);
-    assert_eq!(rve::ffi::rve_version_number(), 300); // 0.3.0
+    assert_eq!(rve::ffi::rve_version_number(), 400); // 0.4.0
 }
 
 /// Every function `rve.h` declares is re-exported by `rve::ffi` (`src/ffi/mod.rs`), so a
