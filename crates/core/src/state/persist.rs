@@ -37,7 +37,7 @@
 //! | 7 | main after 0.2.0 | format 6 plus the fast path's `LinearBranch` (read, kept; no point held against its gap) |
 //! | 8 | main after 0.2.0 | format 7 plus the points held at a contact status their gap contradicts, a bitset ([`State::held_contact`]) (read, kept; no IMPL-EX history) |
 //! | 9 | 0.3.0 | format 8 plus IMPL-EX's previous history, step and contact status (`ImplexHistory`), empty with implicit integration (read, not verified against the model's fingerprint) |
-//! | 10 | main after 0.3.0 | format 9 with the model's fingerprint in the header (written) |
+//! | 10 | 0.4.0 | format 9 with the model's fingerprint in the header (written) |
 //!
 //! The functions take the sizes of the state's model ([`StateSizes`]) instead of the
 //! model, so this module depends on the state alone; `model::Instance::save_state` and
