@@ -14,6 +14,7 @@ mod common;
 
 use std::sync::Arc;
 
+use common::hard_paths::{self, host_follow};
 use rve::model::mixed::update_mixed;
 use rve::{Instance, Model, Scene, TangentRequest};
 
@@ -203,4 +204,156 @@ fn the_tangent_with_paste_cracks_matches_finite_differences() {
         checked.iter().any(|&(l, u)| l > 0 && u > 0),
         "no state with both branches: {checked:?}"
     );
+}
+
+/// Follows uniaxial stress in x (IMPL-EX) through `strains` from `inst`'s state: the
+/// stresses in x.
+fn follow_uniaxial(inst: &mut Instance, ws: &mut rve::Workspace, strains: &[f64]) -> Vec<f64> {
+    strains
+        .iter()
+        .map(|&e| {
+            let (r, _) = update_mixed(inst, [e, 0.0, 0.0], [false, true, true], 1.0, ws)
+                .unwrap_or_else(|err| panic!("strain {e:e}: {err}"));
+            inst.commit().unwrap();
+            r.stress[0]
+        })
+        .collect()
+}
+
+/// Tension into the softening, unloading, then compression: the cracks close, and the
+/// cell's stiffness in compression after closure is at least 80 % of the virgin cell's
+/// (the unilateral effect survives the failing paste). Further in compression the closed
+/// cracks slide without friction and the cell softens at a low compressive strength
+/// (printed; friction is not in yet).
+#[test]
+fn closed_cracks_give_back_the_compressive_stiffness() {
+    let model = model_with(&[]);
+    let mut inst = Instance::new(model.clone());
+    let mut ws = model.workspace();
+    let tension: Vec<f64> = (1..=200).map(|k| 2e-3 * k as f64 / 200.0).collect();
+    let back: Vec<f64> = (1..=300).map(|k| 2e-3 - 3e-3 * k as f64 / 300.0).collect();
+    let up = follow_uniaxial(&mut inst, &mut ws, &tension);
+    let down = follow_uniaxial(&mut inst, &mut ws, &back);
+    let peak = up.iter().copied().fold(f64::MIN, f64::max);
+    let virgin = up[0] / tension[0];
+    let n = back.len();
+    let at_zero = back.iter().position(|&e| e <= 0.0).unwrap();
+    // Just after closure: the first 10 increments in compression (to -1.1e-4).
+    let (a, b) = (at_zero, at_zero + 10);
+    let closed = (down[b] - down[a]) / (back[b] - back[a]);
+    let strength = down.iter().copied().fold(f64::MAX, f64::min);
+    println!(
+        "peak {peak:.3} MPa, {:.3} MPa at 2e-3; virgin {virgin:.0} MPa, after closure {closed:.0} MPa \
+         ({:.3}); stress at zero strain {:.2e}; largest compression {strength:.2} MPa (f_c/f_t {:.1} \
+         without friction)",
+        up[199],
+        closed / virgin,
+        down[at_zero],
+        -strength / peak
+    );
+    assert!(up[199] < 0.5 * peak, "not softened: {} of {peak}", up[199]);
+    assert!(down[n - 1] < -0.5 * peak, "no compression: {}", down[n - 1]);
+    assert!(
+        closed >= 0.8 * virgin,
+        "compressive stiffness {closed} against {virgin}"
+    );
+}
+
+/// A checkpoint of a cracked cell in the softening continues bit for bit: the state bytes
+/// carry the paste's interfaces as they carry the ITZ's.
+#[test]
+fn a_checkpoint_of_a_cracked_cell_continues_bit_for_bit() {
+    let model = model_with(&[]);
+    let strains: Vec<f64> = (1..=120).map(|k| 1e-3 * k as f64 / 100.0).collect();
+    let (first, rest) = strains.split_at(60);
+    let mut a = Instance::new(model.clone());
+    let mut ws = model.workspace();
+    follow_uniaxial(&mut a, &mut ws, first);
+    assert!(
+        a.committed().history.iter().any(|&h| h > 0.0),
+        "nothing cracked before the checkpoint"
+    );
+    let bytes = a.save_state().unwrap();
+    let mut b = Instance::new(model.clone());
+    b.load_state(&bytes).unwrap();
+    let (sa, sb) = (
+        follow_uniaxial(&mut a, &mut ws, rest),
+        follow_uniaxial(&mut b, &mut ws, rest),
+    );
+    for (k, (x, y)) in sa.iter().zip(&sb).enumerate() {
+        assert_eq!(
+            x.to_bits(),
+            y.to_bits(),
+            "increment {k} after the checkpoint"
+        );
+    }
+    println!(
+        "checkpoint of {} bytes; {} increments after it alike",
+        bytes.len(),
+        sa.len()
+    );
+}
+
+/// The hard paths' eight families (`common/hard_paths.rs`: uniaxial strain and stress,
+/// shear reversal, biaxial, tension-compression, unload-reload, a turn, steps across the
+/// softening), scaled ten times to take the cell through its failure, on the failing cell
+/// with `scheme`: each path finished by a host that retries with the suggested step ratio;
+/// the retries per family, or the failures.
+fn hard_paths_on_the_failing_cell(
+    scheme: &str,
+    families: std::ops::Range<u64>,
+) -> Result<Vec<u32>, Vec<String>> {
+    let model = match scheme {
+        "implex" => model_with(&[]),
+        _ => model_with(&[("integration = \"implex\"", "integration = \"implicit\"")]),
+    };
+    let (mut retries, mut failures) = (Vec::new(), Vec::new());
+    for seed in families {
+        let case = hard_paths::case(seed);
+        let targets: Vec<[f64; 3]> = case.targets.iter().map(|t| t.map(|e| 10.0 * e)).collect();
+        let largest = targets.iter().flatten().fold(0.0f64, |m, e| m.max(e.abs()));
+        let t0 = std::time::Instant::now();
+        match host_follow(&mut Instance::new(model.clone()), &targets) {
+            Ok(run) => {
+                let r = run.retries;
+                println!(
+                    "{}: {scheme}: {} increments to |eps| {largest:.1e}, {r} retries, {:.1} s",
+                    case.kind,
+                    targets.len(),
+                    t0.elapsed().as_secs_f64()
+                );
+                retries.push(r);
+            }
+            Err(e) => failures.push(format!("{} ({scheme}): {e}", case.kind)),
+        }
+    }
+    if failures.is_empty() {
+        Ok(retries)
+    } else {
+        Err(failures)
+    }
+}
+
+/// IMPL-EX: every hard path without a single failed update.
+#[test]
+fn the_hard_paths_complete_on_the_failing_cell_with_implex() {
+    let retries =
+        hard_paths_on_the_failing_cell("implex", 0..8).unwrap_or_else(|f| panic!("{f:#?}"));
+    assert!(
+        retries.iter().all(|&r| r == 0),
+        "failed updates: {retries:?}"
+    );
+}
+
+/// The implicit scheme: every hard path finished (retries allowed, each clean); the
+/// families in two halves, which the test threads run side by side.
+#[test]
+fn the_hard_paths_complete_on_the_failing_cell_implicitly() {
+    hard_paths_on_the_failing_cell("implicit", 0..4).unwrap_or_else(|f| panic!("{f:#?}"));
+}
+
+/// The other half of the families, implicitly.
+#[test]
+fn the_other_hard_paths_complete_on_the_failing_cell_implicitly() {
+    hard_paths_on_the_failing_cell("implicit", 4..8).unwrap_or_else(|f| panic!("{f:#?}"));
 }

@@ -12,66 +12,8 @@ mod common;
 
 use std::sync::Arc;
 
-use common::hard_paths;
-use rve::{Error, Instance, Model, Scene, TangentRequest};
-
-/// What the host loop did on one path.
-#[derive(Default)]
-struct HostRun {
-    updates: u32,
-    /// Updates that failed and were retried with a smaller step.
-    retries: u32,
-}
-
-/// Follows `targets` like a host: each increment from the committed state; on a solver
-/// failure, checks it is clean and retries the rest of the increment with the suggested
-/// step ratio (growing the step again after a success). Err: a failure that is not clean,
-/// or more than 200 retries on one increment.
-fn host_follow(inst: &mut Instance, targets: &[[f64; 3]]) -> Result<HostRun, String> {
-    let model = inst.model().clone();
-    let mut ws = model.workspace();
-    let mut run = HostRun::default();
-    for (k, target) in targets.iter().enumerate() {
-        let start = inst.committed().strain;
-        let (mut done, mut step, mut retries) = (0.0f64, 1.0f64, 0);
-        while done < 1.0 {
-            let to = (done + step).min(1.0);
-            let eps: [f64; 3] = std::array::from_fn(|c| start[c] + to * (target[c] - start[c]));
-            let before = inst.committed().clone();
-            run.updates += 1;
-            match inst.update(eps, &mut ws, TangentRequest::Consistent) {
-                Ok(r) => {
-                    if !(r.stress.iter().chain(&r.tangent).all(|v| v.is_finite())) {
-                        return Err(format!("increment {}: non-finite response", k + 1));
-                    }
-                    inst.commit().map_err(|e| e.to_string())?;
-                    done = to;
-                    step = (2.0 * step).min(1.0);
-                }
-                Err(Error::Solve {
-                    suggested_step_ratio,
-                    reason,
-                    ..
-                }) => {
-                    if !(suggested_step_ratio > 0.0 && suggested_step_ratio < 1.0) {
-                        return Err(format!("step ratio {suggested_step_ratio} ({reason})"));
-                    }
-                    if *inst.committed() != before {
-                        return Err(format!("increment {}: failure changed the state", k + 1));
-                    }
-                    run.retries += 1;
-                    retries += 1;
-                    if retries > 200 {
-                        return Err(format!("increment {}: 200 retries ({reason})", k + 1));
-                    }
-                    step *= suggested_step_ratio;
-                }
-                Err(e) => return Err(format!("increment {}: not a solver failure: {e}", k + 1)),
-            }
-        }
-    }
-    Ok(run)
-}
+use common::hard_paths::{self, host_follow};
+use rve::{Instance, Model, Scene};
 
 /// The case's model, with `max_iterations = 40` of its `[solver]` replaced by `solver`.
 fn model_of(case: &hard_paths::HardCase, solver: &str) -> Arc<Model> {

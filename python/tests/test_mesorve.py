@@ -150,3 +150,43 @@ def test_section_521_path_equals_rve_run(paper, tmp_path):
         assert np.abs(sig[0] - expected_sig).max() <= 1e-12 * np.abs(expected_sig).max()
         assert np.abs(D[0].ravel() - expected_D).max() <= 1e-12 * scale
         assert points.report()["iterations"][0] == int(row["iterations"])
+
+
+FRACTURE = str(ROOT / "scenes" / "concrete_fracture.toml")
+
+
+def update_uniaxial(points, eps_xx, start, dtime, tol=1e-8, iterations=25):
+    """The recipe of docs/python.md ("Uniaxial stress"): trial-updates `points` to the
+    strains `eps_xx` (n,) with sigma_yy = sigma_xy = 0, by Newton's method on the free block
+    of D from the strains `start` (n, 3). Returns (sig, D, eps)."""
+    eps = np.array(start, dtype=float)
+    eps[:, 0] = eps_xx
+    for _ in range(iterations):
+        sig, D = points.update(eps, dtime=dtime)
+        free = sig[:, 1:]
+        if np.abs(free).max() <= tol * max(np.abs(sig).max(), 1e-6):
+            return sig, D, eps
+        eps[:, 1:] -= np.linalg.solve(D[:, 1:, 1:], free[..., None])[..., 0]
+    raise RuntimeError("the zero-stress components did not converge")
+
+
+def test_uniaxial_stress_recipe_follows_rve_run_through_failure(tmp_path):
+    subprocess.run([RVE, "run", FRACTURE, "--quiet", "--out", str(tmp_path),
+                    "--set", "path.0.to=[2e-3, 0.0, 0.0]", "--set", "path.0.increments=200"],
+                   check=True)
+    with open(tmp_path / "response.csv") as f:
+        rows = list(csv.DictReader(f))
+    points = mesorve.Model(FRACTURE).points(1)
+    eps = np.zeros((1, 3))
+    got = []
+    for row in rows:
+        sig, _, eps = update_uniaxial(points, [float(row["eps_xx"])], eps, dtime=1e-5)
+        points.commit()
+        got.append(sig[0])
+    expected = np.array([[float(r[k]) for k in ("sig_xx", "sig_yy", "sig_xy")] for r in rows])
+    got = np.array(got)
+    peak = expected[:, 0].max()
+    assert 2.5 <= peak <= 4.5
+    assert expected[-1, 0] < 0.5 * peak  # through the peak into the softening
+    assert np.abs(got[:, 1:]).max() <= 1e-6 * peak
+    assert np.abs(got[:, 0] - expected[:, 0]).max() <= 1e-4 * peak
