@@ -1,9 +1,11 @@
 //! Constitutive laws of the zero-thickness interfaces, behind the [`InterfaceLaw`] trait:
 //! the paper's cohesive-contact law of the ITZ, a linear elastic interface, and the law of
-//! a crack through the paste (stiff to its strength, then Hordijk's softening).
+//! a crack through the paste (stiff to its strength, then Hordijk's softening); Coulomb's
+//! friction of a closed crack, which no law uses yet.
 
 mod cohesive;
 mod crack;
+mod friction;
 mod implex;
 mod law;
 mod linear;
@@ -12,6 +14,7 @@ pub use cohesive::{CohesiveHistory, CohesivePoint};
 pub use cohesive::{CohesiveLaw, ContactShear, Penalty};
 pub use cohesive::{ItzSpec, PenaltySpec};
 pub use crack::{CrackLaw, CrackSpec, STIFFNESS_FACTOR};
+pub use friction::{Coulomb, FrictionPoint};
 pub use implex::Implex;
 pub use law::{Branch, InterfaceLaw, InterfaceLawSpec, LawPoint, PointMeasures, TangentKind};
 pub use linear::LinearInterface;
