@@ -73,7 +73,18 @@ impl SceneSpec {
             ));
         }
         validate_interface_laws(&self.materials, self.effects.cohesive && has_inclusions)?;
-        validate_paste_cracking(&self.effects, &self.materials)
+        validate_paste_cracking(&self.effects, &self.materials)?;
+        if self.effects.paste_cracking && self.solver.step_tolerance.is_some() {
+            // Measured: on the failing cell the estimate does not fall with the step at the
+            // paste's brittle drops, and a controlled run was 21 % of the peak off.
+            return Err(Error::scene(
+                "solver.step_tolerance",
+                "not with effects.paste_cracking yet: its error estimate does not cover the \
+                 paste's cracks, so it would not hold (docs/fracture.md); leave it out and \
+                 choose the increments",
+            ));
+        }
+        Ok(())
     }
 }
 
