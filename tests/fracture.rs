@@ -361,8 +361,8 @@ fn the_other_hard_paths_complete_on_the_failing_cell_implicitly() {
 
 /// Sharing keeps its bound on the failing cell: eight points at scales 0.96-1.04 through
 /// failure and back (2e-3 in 60 increments, back in 30), each tolerance the scene accepts,
-/// every point against its own exact run. (It shares little here: measured, 7 of 720
-/// calls, the virgin first increment's twins.)
+/// every point against its own exact run. (It shares little here: mostly the virgin first
+/// increment's twins.)
 #[test]
 fn sharing_keeps_its_bound_on_the_failing_cell() {
     let scene = "scenes/concrete_fracture.toml";
@@ -387,7 +387,7 @@ fn sharing_keeps_its_bound_on_the_failing_cell() {
 }
 
 /// `solver.step_tolerance` is refused with paste cracks: its estimate does not cover them
-/// (measured: a controlled run 21 % of the peak off a fine one).
+/// (docs/fracture.md).
 #[test]
 fn step_control_is_refused_with_paste_cracks() {
     let text = std::fs::read_to_string(common::repo(SCENE)).unwrap();

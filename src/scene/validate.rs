@@ -75,8 +75,8 @@ impl SceneSpec {
         validate_interface_laws(&self.materials, self.effects.cohesive && has_inclusions)?;
         validate_paste_cracking(&self.effects, &self.materials)?;
         if self.effects.paste_cracking && self.solver.step_tolerance.is_some() {
-            // Measured: on the failing cell the estimate does not fall with the step at the
-            // paste's brittle drops, and a controlled run was 21 % of the peak off.
+            // The estimate does not yet fall with the step at the paste's brittle drops
+            // (docs/fracture.md): a tolerance it cannot hold is refused.
             return Err(Error::scene(
                 "solver.step_tolerance",
                 "not with effects.paste_cracking yet: its error estimate does not cover the \
