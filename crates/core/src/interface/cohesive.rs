@@ -546,14 +546,12 @@ impl InterfaceLaw for CohesiveLaw {
 
     /// `delta_max` extrapolated; it never decreases (`h_n >= h_{n-1}` and `ratio >= 0`).
     fn extrapolate(&self, committed: &[f64], previous: &[f64], ratio: f64, out: &mut [f64]) {
-        for ((o, &h), &p) in out.iter_mut().zip(committed).zip(previous) {
-            *o = h + ratio.max(0.0) * (h - p).max(0.0);
-        }
+        super::law::extrapolate_growth(committed, previous, ratio, out);
     }
 
     /// `delta_max` is a non-negative opening.
     fn history_is_valid(&self, history: &[f64]) -> bool {
-        history.iter().all(|d| d.is_finite() && *d >= 0.0)
+        super::law::openings_are_valid(history)
     }
 
     /// `delta/delta_c` with the opening the law uses at `jump` (eq. 20; `beta |delta_s|`

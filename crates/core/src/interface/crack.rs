@@ -298,13 +298,11 @@ impl InterfaceLaw for CrackLaw {
     }
 
     fn extrapolate(&self, committed: &[f64], previous: &[f64], ratio: f64, out: &mut [f64]) {
-        for ((o, &h), &p) in out.iter_mut().zip(committed).zip(previous) {
-            *o = h + ratio.max(0.0) * (h - p).max(0.0);
-        }
+        super::law::extrapolate_growth(committed, previous, ratio, out);
     }
 
     fn history_is_valid(&self, history: &[f64]) -> bool {
-        history.iter().all(|d| d.is_finite() && *d >= 0.0)
+        super::law::openings_are_valid(history)
     }
 
     /// Openings over the softening length `w_c` past the strength, and the damage as the

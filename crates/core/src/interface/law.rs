@@ -209,3 +209,16 @@ pub trait InterfaceLawSpec: std::fmt::Debug {
     /// The law; `contact` is the scene's `effects.contact`.
     fn build(&self, contact: bool) -> std::sync::Arc<dyn InterfaceLaw>;
 }
+
+/// The extrapolation of a history that never decreases (an opening's `delta_max`):
+/// `h_n + ratio max(h_n - h_{n-1}, 0)` value by value, the laws' `extrapolate`.
+pub(crate) fn extrapolate_growth(committed: &[f64], previous: &[f64], ratio: f64, out: &mut [f64]) {
+    for ((o, &h), &p) in out.iter_mut().zip(committed).zip(previous) {
+        *o = h + ratio.max(0.0) * (h - p).max(0.0);
+    }
+}
+
+/// Whether every history value is a finite non-negative opening.
+pub(crate) fn openings_are_valid(history: &[f64]) -> bool {
+    history.iter().all(|d| d.is_finite() && *d >= 0.0)
+}

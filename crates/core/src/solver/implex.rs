@@ -112,16 +112,32 @@ pub fn factorize_step(
     } else {
         ws.current.k.copy_from_slice(&disc.k_const);
     }
-    problem
-        .factorize(ws, FactorUse::Reusable)
-        .map_err(|e| Error::Solve {
-            reason: format!("singular RVE tangent on the IMPL-EX step's frozen branches ({e})"),
-            depth: 0,
-            suggested_step_ratio: 0.5,
-        })?;
-    let g = &disc.g;
-    ws.factorization.solve_g(problem.linear, g);
-    Ok(super::tangent::condensed(g, ws.factorization.kg(), None))
+    factorize_frozen(problem, ws, FactorUse::Reusable)?;
+    Ok(super::tangent::condensed(
+        &disc.g,
+        ws.factorization.kg(),
+        None,
+    ))
+}
+
+/// Factorizes the frozen stiffness in `ws.current.k` and solves it for the columns of `G`
+/// (`ws.factorization.kg()`, from which `X eps = -kg eps`).
+fn factorize_frozen(problem: &Problem, ws: &mut Workspace, use_: FactorUse) -> Result<()> {
+    problem.factorize(ws, use_).map_err(|e| Error::Solve {
+        reason: format!("singular RVE tangent on the IMPL-EX step's frozen branches ({e})"),
+        depth: 0,
+        suggested_step_ratio: 0.5,
+    })?;
+    ws.factorization.solve_g(problem.linear, &problem.disc.g);
+    Ok(())
+}
+
+/// The fluctuation `X eps = -kg eps` of a factorized step (`kg` = `K^-1 G`, column-major).
+fn fluctuation(kg: &[f64], strain: &Strain, unknowns: &mut [f64]) {
+    let n = unknowns.len();
+    for (i, x) in unknowns.iter_mut().enumerate() {
+        *x = -(kg[i] * strain[0] + kg[n + i] * strain[1] + kg[2 * n + i] * strain[2]);
+    }
 }
 
 /// Writes into `out` the IMPL-EX `state` with its unknowns at its own strain, `X eps`, when
@@ -155,18 +171,8 @@ pub fn materialize(
     } else {
         ws.current.k.copy_from_slice(&disc.k_const);
     }
-    problem
-        .factorize(ws, FactorUse::OneUse)
-        .map_err(|e| Error::Solve {
-            reason: format!("singular RVE tangent on the IMPL-EX step's frozen branches ({e})"),
-            depth: 0,
-            suggested_step_ratio: 0.5,
-        })?;
-    ws.factorization.solve_g(problem.linear, &disc.g);
-    let (n, kg, strain) = (problem.n(), ws.factorization.kg(), state.strain);
-    for (i, x) in out.unknowns.iter_mut().enumerate() {
-        *x = -(kg[i] * strain[0] + kg[n + i] * strain[1] + kg[2 * n + i] * strain[2]);
-    }
+    factorize_frozen(problem, ws, FactorUse::OneUse)?;
+    fluctuation(ws.factorization.kg(), &state.strain, &mut out.unknowns);
     Ok(true)
 }
 
@@ -181,7 +187,7 @@ pub fn store_step(
     szz: [f64; 3],
     ws: &Workspace,
 ) {
-    let (n, points) = (problem.n(), problem.disc.interface_points());
+    let points = problem.disc.interface_points();
     let linear: &mut LinearBranch = &mut trial.linear;
     linear.jumps.resize(JUMP_OPERATOR_LEN * points, 0.0);
     linear.closed.clear();
@@ -192,9 +198,7 @@ pub fn store_step(
     linear.szz = szz;
     linear.unknowns_strain = *strain;
     linear.valid = true;
-    for (i, x) in trial.unknowns.iter_mut().enumerate() {
-        *x = -(kg[i] * strain[0] + kg[n + i] * strain[1] + kg[2 * n + i] * strain[2]);
-    }
+    fluctuation(kg, strain, &mut trial.unknowns);
 }
 
 /// The trial at `strain` of the step kept in `trial.linear`, from `committed`: its strain,
