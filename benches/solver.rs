@@ -4,7 +4,7 @@
 //! the section 5.2.1 path (`eps_xx` to 2.2e-4 in 20 increments; the mean carries the
 //! post-peak increments), the iterations per increment, the median numeric factorization
 //! of the converged tangent as the solver does it (LDL^T, a checked LBL^T when that fails,
-//! LU last) with the share of each kind, and LU alone for comparison, the solve times with
+//! LU last) with the share of each kind, and `FactorMethod::Lu` alone for comparison, the solve times with
 //! 1, 3 and 4 right-hand sides (the widths the solver uses: a chord correction, the
 //! tangent's sweep, a Newton correction with the tangent's columns), the bytes of one
 //! instance's state, and two ratios per increment (medians):
@@ -17,13 +17,23 @@
 //!   actually done (chord corrections reuse one, the tangent may add one): how much an
 //!   update costs beyond the linear algebra it did.
 //!
+//! A second table times, per scene, one factorization and a one-column solve of the
+//! tangent at `eps_xx = 1e-4` made non-symmetric (the entries `(i, j)`, `i < j`,
+//! `i + j` a multiple of 3, scaled by 1.3: a friction tangent's structure, symmetric
+//! pattern and non-symmetric values) with `FactorMethod::Lu` (the LU without pivoting,
+//! probe check included) and with faer's supernodal LU with partial pivoting (the
+//! allocating fallback), against the LDL^T of the symmetric tangent, in the same run.
+//!
 //! Timing tests do not belong in the test suite (noisy machines); this is the place.
 
 use std::sync::Arc;
 use std::time::Instant;
 
-use faer::dyn_stack::MemStack;
-use mesorve_core::solver::FactorKind;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu};
+use faer::sparse::SparseColMatRef;
+use faer::{Conj, MatMut, Par};
+use mesorve_core::solver::{FactorKind, FactorMethod, LinearSolver};
 use rve::{Instance, Model, Scene, TangentRequest};
 
 /// Right-hand-side counts the solver's solves use, timed one by one.
@@ -110,7 +120,7 @@ fn bench(path: &str) -> Row {
                         &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
-                        mesorve_core::solver::FactorMethod::SymmetricFirst,
+                        FactorMethod::SymmetricFirst,
                         MemStack::new(&mut stack),
                     )
                     .expect("factorization");
@@ -142,7 +152,7 @@ fn bench(path: &str) -> Row {
                         &model.discretization().pattern.symbolic,
                         ws.tangent_values(),
                         &mut numeric,
-                        mesorve_core::solver::FactorMethod::Lu,
+                        FactorMethod::Lu,
                         MemStack::new(&mut stack),
                     )
                     .expect("lu");
@@ -201,6 +211,114 @@ fn bench(path: &str) -> Row {
     }
 }
 
+/// Medians (ms) of one factorization and one-column solve of the paper path's tangent at
+/// `eps_xx = 1e-4`: LDL^T of the tangent, and of its non-symmetric variant (module docs)
+/// `FactorMethod::Lu` and faer's supernodal LU with partial pivoting.
+struct LuRow {
+    name: String,
+    unknowns: usize,
+    ldlt_ms: f64,
+    static_lu_ms: f64,
+    pivoted_lu_ms: f64,
+    /// Whether every `FactorMethod::Lu` was the LU without pivoting.
+    static_accepted: bool,
+}
+
+fn lu_bench(path: &str) -> LuRow {
+    let model =
+        Arc::new(Model::from_scene(&Scene::from_file(path).expect("scene")).expect("model"));
+    let mut ws = model.workspace();
+    let mut inst = Instance::new(model.clone());
+    inst.update([1e-4, 0.0, 0.0], &mut ws, TangentRequest::Consistent)
+        .expect("update");
+    let pattern = &model.discretization().pattern.symbolic;
+    let n = pattern.nrows();
+    let symmetric = ws.tangent_values().to_vec();
+    let mut values = symmetric.clone();
+    let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+    for j in 0..n {
+        for k in col_ptr[j]..col_ptr[j + 1] {
+            if row_idx[k] < j && (row_idx[k] + j) % 3 == 0 {
+                values[k] *= 1.3;
+            }
+        }
+    }
+    // The analysis a model with friction has (the paper's cell has none).
+    let solver = LinearSolver::for_non_symmetric(pattern, true).expect("analysis");
+    let mut numeric = solver.numeric();
+    let mut stack = MemBuffer::new(solver.scratch(1));
+    let rhs0: Vec<f64> = ws.residual().to_vec();
+    let mut rhs = rhs0.clone();
+    let repeats = if n < 2000 { 200 } else { 20 };
+    let mut time = |values: &[f64], method: FactorMethod| {
+        let mut times = Vec::new();
+        for _ in 0..repeats {
+            rhs.copy_from_slice(&rhs0);
+            let t = Instant::now();
+            solver
+                .factorize(
+                    pattern,
+                    values,
+                    &mut numeric,
+                    method,
+                    MemStack::new(&mut stack),
+                )
+                .expect("factorization");
+            solver.solve_in_place(&mut numeric, &mut rhs, 1, MemStack::new(&mut stack));
+            times.push(t.elapsed().as_secs_f64());
+        }
+        1e3 * median(&mut times)
+    };
+    let ldlt_ms = time(&symmetric, FactorMethod::SymmetricFirst);
+    let static_lu_ms = time(&values, FactorMethod::Lu);
+    let static_accepted = numeric.lu_count == 0 && numeric.static_lu_count == repeats as u64;
+    let pivoted_lu_ms = pivoted_lu_time(pattern, &values, &rhs0, repeats);
+    LuRow {
+        name: path.rsplit('/').next().unwrap_or(path).to_string(),
+        unknowns: n,
+        ldlt_ms,
+        static_lu_ms,
+        pivoted_lu_ms,
+        static_accepted,
+    }
+}
+
+/// Median (ms) of faer's supernodal LU with partial pivoting (COLAMD, as
+/// `LinearSolver`'s fallback) and a one-column solve.
+fn pivoted_lu_time(
+    pattern: &faer::sparse::SymbolicSparseColMat<usize>,
+    values: &[f64],
+    rhs0: &[f64],
+    repeats: usize,
+) -> f64 {
+    let symbolic = factorize_symbolic_lu(pattern.as_ref(), Default::default()).expect("analysis");
+    let mut lu = NumericLu::new();
+    let mut stack = MemBuffer::new(StackReq::any_of(&[
+        symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+        symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+    ]));
+    let a = SparseColMatRef::new(pattern.as_ref(), values);
+    let mut rhs = rhs0.to_vec();
+    let mut times = Vec::new();
+    for _ in 0..repeats {
+        rhs.copy_from_slice(rhs0);
+        let t = Instant::now();
+        let factor_stack = MemStack::new(&mut stack);
+        symbolic
+            .factorize_numeric_lu(&mut lu, a, Par::Seq, factor_stack, Default::default())
+            .expect("LU");
+        let x = MatMut::from_column_major_slice_mut(&mut rhs, rhs0.len(), 1);
+        LuRef::new_unchecked(&symbolic, &lu).solve_in_place_with_conj(
+            Conj::No,
+            x,
+            Par::Seq,
+            MemStack::new(&mut stack),
+        );
+        times.push(t.elapsed().as_secs_f64());
+    }
+    1e3 * median(&mut times)
+}
+
 fn main() {
     let root = env!("CARGO_MANIFEST_DIR");
     let scenes = [
@@ -236,6 +354,29 @@ fn main() {
             r.state_bytes,
             r.ratio,
             r.overhead
+        );
+    }
+    println!();
+    println!(
+        "| scene | unknowns | LDL^T, symmetric tangent (ms) | FactorMethod::Lu, non-symmetric (ms) | faer supernodal LU, non-symmetric (ms) | FactorMethod::Lu / LDL^T | faer LU / FactorMethod::Lu | LU without pivoting accepted |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for s in &scenes {
+        let r = lu_bench(s);
+        println!(
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {} |",
+            r.name,
+            r.unknowns,
+            r.ldlt_ms,
+            r.static_lu_ms,
+            r.pivoted_lu_ms,
+            r.static_lu_ms / r.ldlt_ms,
+            r.pivoted_lu_ms / r.static_lu_ms,
+            if r.static_accepted {
+                "always"
+            } else {
+                "not always"
+            }
         );
     }
 }

@@ -511,7 +511,7 @@ fn compare(setup: &Setup, strains: &[[f64; 3]], name: &str) -> Errors {
         let (expected, slot) = match refp.branch {
             Branch::Loading => ((n_points, 0, 0), 0),
             Branch::Unloading => ((0, n_points, 0), 1),
-            Branch::Contact => ((0, 0, n_points), 2),
+            Branch::Contact | Branch::Sliding => ((0, 0, n_points), 2),
         };
         errors.branches[slot] += 1;
         assert_eq!(

@@ -120,6 +120,7 @@ fn checked_indefinite_factorizations_do_not_allocate() {
                     &pattern.symbolic,
                     &values,
                     mesorve_core::solver::FactorUse::OneUse,
+                    true,
                 )
                 .unwrap();
             factorization.solve(model.linear_solver(), rhs, 1);

@@ -68,6 +68,7 @@ pub fn solve_fixed(
                 &disc.pattern.symbolic,
                 &k,
                 mesorve_core::solver::FactorUse::Reusable,
+                true,
             )
             .ok()?;
         let mut dx: Vec<f64> = r.iter().map(|v| -v).collect();

@@ -22,7 +22,8 @@
 //! - **stress**: `s_33 = s_zz` of the RVE in plane strain; `s_13 = s_23 = 0`.
 //! - **tangent** `DDSDDE(i, j) = d s_i / d eps_j` (column-major, as Fortran declares it):
 //!   - the in-plane block (host indices 1, 2 and 4 of NTENS 4 and 6) is the RVE's
-//!     consistent tangent `D`;
+//!     consistent tangent `D`, as it is: not symmetric where a crack slides under
+//!     friction;
 //!   - row 3 is the exact `d s_zz / d eps` of the RVE;
 //!   - column 3 (`d s_i / d eps_33`) is row 3 transposed. The 2D RVE cannot compute the
 //!     response to an out-of-plane strain; the transpose is exact for the elastic RVE

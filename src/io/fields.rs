@@ -8,14 +8,15 @@
 //!   sum `Homogenizer::stress` computes in another order.
 //! - Per interface element: the local jump `[delta_s, delta_n]` averaged over the element
 //!   with the quadrature weights (the jump at mid-length: it is linear), and the law's
-//!   [`PointMeasures`] averaged the same way; the branch is the majority of the points.
+//!   [`PointMeasures`] and the frictional slip averaged the same way; the branch is the
+//!   majority of the points.
 
 use nalgebra::{SVector, Vector3};
 
 use mesorve_core::assembly::Discretization;
 use mesorve_core::constraint::FIXED;
 use mesorve_core::element::interface4;
-use mesorve_core::interface::{Branch, PointMeasures, TangentKind};
+use mesorve_core::interface::{Branch, InterfaceLaw, PointMeasures, TangentKind};
 use mesorve_core::mesh::Mesh;
 use mesorve_core::state::State;
 
@@ -31,6 +32,8 @@ pub struct ItzFields {
     pub shear_opening: f64,
     /// Mean normal jump `delta_n` (> 0 open, < 0 interpenetration).
     pub normal_opening: f64,
+    /// Mean frictional slip (NaN for a law without friction).
+    pub slip: f64,
     /// Mean `delta/delta_c`, `delta_max/delta_c`, `delta_max` and damage of the points (NaN when the
     /// law has no characteristic opening or the scene has no interface law).
     pub measures: PointMeasures,
@@ -107,16 +110,7 @@ impl RveFields {
         let Some(laws) = disc.law.as_ref() else {
             return Vec::new();
         };
-        let rule = disc.quadrature.rule();
-        let hl = laws.history_len();
-        let per_element = rule.len() * hl;
-        let mut scratch = vec![0.0; hl];
-        let nan = PointMeasures {
-            opening_ratio: f64::NAN,
-            max_opening_ratio: f64::NAN,
-            max_opening: f64::NAN,
-            damage: f64::NAN,
-        };
+        let per_element = disc.quadrature.rule().len() * laws.history_len();
         disc.interfaces
             .iter()
             .zip(&disc.interface_dofs)
@@ -125,57 +119,7 @@ impl RveFields {
                 let u = SVector::<f64, 8>::from_fn(|i, _| fluct(dofs[i]));
                 let jumps = interface4::local_jumps(geometry, disc.quadrature, &u);
                 let history = &state.history[e * per_element..(e + 1) * per_element];
-                let law = laws.of(e);
-                let (mut ds, mut dn) = (0.0, 0.0);
-                let mut m = PointMeasures {
-                    opening_ratio: 0.0,
-                    max_opening_ratio: 0.0,
-                    max_opening: 0.0,
-                    damage: 0.0,
-                };
-                let mut has_measures = true;
-                let mut counts = [0usize; 3];
-                for (p, &(_, w)) in rule.iter().enumerate() {
-                    let h = &history[p * hl..(p + 1) * hl];
-                    let w = 0.5 * w;
-                    ds += w * jumps[p][0];
-                    dn += w * jumps[p][1];
-                    match law.measures(h, jumps[p], geometry.length) {
-                        Some(pm) => {
-                            m.opening_ratio += w * pm.opening_ratio;
-                            m.max_opening_ratio += w * pm.max_opening_ratio;
-                            m.max_opening += w * pm.max_opening;
-                            m.damage += w * pm.damage;
-                        }
-                        None => has_measures = false,
-                    }
-                    let point = law.respond(
-                        h,
-                        &mut scratch,
-                        jumps[p],
-                        geometry.length,
-                        TangentKind::Consistent,
-                    );
-                    counts[match point.branch {
-                        Branch::Loading => 0,
-                        Branch::Unloading => 1,
-                        Branch::Contact => 2,
-                    }] += 1;
-                }
-                let branch = if counts[2] >= counts[0] && counts[2] >= counts[1] {
-                    BRANCH_CONTACT
-                } else if counts[0] >= counts[1] {
-                    BRANCH_LOADING
-                } else {
-                    BRANCH_UNLOADING
-                };
-                ItzFields {
-                    shear_opening: ds,
-                    normal_opening: dn,
-                    measures: if has_measures { m } else { nan },
-                    branch,
-                    closed_points: counts[2],
-                }
+                element_fields(disc, laws.of(e), geometry.length, &jumps, history)
             })
             .collect()
     }
@@ -189,5 +133,80 @@ impl RveFields {
             }
         }
         s.map(|v| v / volume)
+    }
+}
+
+/// The fields of one interface element with law `law` and reference length `length`,
+/// from its points' local jumps and histories.
+fn element_fields(
+    disc: &Discretization,
+    law: &dyn InterfaceLaw,
+    length: f64,
+    jumps: &[[f64; 2]],
+    history: &[f64],
+) -> ItzFields {
+    let hl = law.history_len();
+    let mut scratch = [0.0; 16];
+    let (mut ds, mut dn, mut slip) = (0.0, 0.0, 0.0);
+    let mut m = PointMeasures {
+        opening_ratio: 0.0,
+        max_opening_ratio: 0.0,
+        max_opening: 0.0,
+        damage: 0.0,
+    };
+    let mut has_measures = true;
+    let mut counts = [0usize; 3];
+    for (p, &(_, w)) in disc.quadrature.rule().iter().enumerate() {
+        let h = &history[p * hl..(p + 1) * hl];
+        let w = 0.5 * w;
+        ds += w * jumps[p][0];
+        dn += w * jumps[p][1];
+        slip += w * law.slip(h).unwrap_or(f64::NAN);
+        match law.measures(h, jumps[p], length) {
+            Some(pm) => {
+                m.opening_ratio += w * pm.opening_ratio;
+                m.max_opening_ratio += w * pm.max_opening_ratio;
+                m.max_opening += w * pm.max_opening;
+                m.damage += w * pm.damage;
+            }
+            None => has_measures = false,
+        }
+        let point = law.respond(
+            h,
+            &mut scratch[..hl],
+            jumps[p],
+            length,
+            TangentKind::Consistent,
+        );
+        counts[match point.branch {
+            Branch::Loading => 0,
+            Branch::Unloading => 1,
+            Branch::Contact | Branch::Sliding => 2,
+        }] += 1;
+    }
+    let branch = if counts[2] >= counts[0] && counts[2] >= counts[1] {
+        BRANCH_CONTACT
+    } else if counts[0] >= counts[1] {
+        BRANCH_LOADING
+    } else {
+        BRANCH_UNLOADING
+    };
+    let nan = f64::NAN;
+    ItzFields {
+        shear_opening: ds,
+        normal_opening: dn,
+        slip,
+        measures: if has_measures {
+            m
+        } else {
+            PointMeasures {
+                opening_ratio: nan,
+                max_opening_ratio: nan,
+                max_opening: nan,
+                damage: nan,
+            }
+        },
+        branch,
+        closed_points: counts[2],
     }
 }

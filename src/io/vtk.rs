@@ -126,7 +126,8 @@ fn write_grid(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
 /// Point data: `displacement` (3 components, z = 0, for ParaView's "Warp By Vector").
 /// Cell data, on every cell (NaN, or -1 for `branch`, where a value does not apply):
 /// `phase`, `element_kind`, `strain` and `stress` (`[xx, yy, xy]`, engineering shear
-/// strain) on triangles; `shear_opening`, `normal_opening`, `opening_ratio`
+/// strain) on triangles; `shear_opening`, `normal_opening`, `slip` (frictional; NaN
+/// without friction), `opening_ratio`
 /// (`delta/delta_c`), `max_opening_ratio` (`delta_max/delta_c`), `damage`, `branch`
 /// (0 loading, 1 unloading, 2 contact) and `closed_points` (points in contact) on
 /// interface elements (see [`RveFields`]).
@@ -161,9 +162,10 @@ pub fn write_vtu_fields(mesh: &Mesh, fields: &RveFields, w: &mut impl Write) -> 
         data_array(w, "Float64", name, 3, &flat)?;
     }
     let nan_tri = || std::iter::repeat_n(f64::NAN, n_tri);
-    let scalars: [(&str, Vec<f64>); 5] = [
+    let scalars: [(&str, Vec<f64>); 6] = [
         ("shear_opening", itz(&|e| e.shear_opening)),
         ("normal_opening", itz(&|e| e.normal_opening)),
+        ("slip", itz(&|e| e.slip)),
         ("opening_ratio", itz(&|e| e.measures.opening_ratio)),
         ("max_opening_ratio", itz(&|e| e.measures.max_opening_ratio)),
         ("damage", itz(&|e| e.measures.damage)),

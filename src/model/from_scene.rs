@@ -5,8 +5,9 @@
 
 use std::sync::Arc;
 
+use crate::error::Result;
 use crate::scene::SceneSpec;
-use mesorve_core::interface::{InterfaceLaw, STIFFNESS_FACTOR};
+use mesorve_core::interface::{Frictional, InterfaceLaw, STIFFNESS_FACTOR};
 
 /// The interface law of `[materials]`, or `None` without ITZ (`effects.cohesive` off, or
 /// no law given for a cell without inclusions).
@@ -17,6 +18,21 @@ pub fn interface_law(spec: &SceneSpec) -> Option<Arc<dyn InterfaceLaw>> {
     let mut laws = spec.materials.interface_laws().into_iter();
     let law = laws.find_map(|(_, law)| law)?;
     Some(law.build(spec.effects.contact))
+}
+
+/// `law` with the scene's Coulomb friction (`effects.friction`), or `law` itself.
+pub fn with_friction(
+    spec: &SceneSpec,
+    law: Arc<dyn InterfaceLaw>,
+) -> Result<Arc<dyn InterfaceLaw>> {
+    match (&spec.materials.friction, spec.effects.friction) {
+        (Some(friction), true) => Ok(Arc::new(Frictional::new(
+            law,
+            friction.coefficient,
+            "materials.friction",
+        )?)),
+        _ => Ok(law),
+    }
 }
 
 /// The law of cracks through the paste (`effects.paste_cracking`), its default stiffness

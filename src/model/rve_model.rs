@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::fingerprint::scene_fingerprint;
-use super::from_scene::{interface_law, paste_law};
+use super::from_scene::{interface_law, paste_law, with_friction};
 use super::microstructure::build_microstructure;
 use crate::error::{Error, Result};
 use crate::scene::{Scene, MAX_STRAIN};
@@ -95,15 +95,23 @@ impl Model {
                 analysis: spec.cell.analysis,
                 matrix: spec.materials.matrix,
                 aggregate: spec.materials.aggregate.unwrap_or(spec.materials.matrix),
-                law: interface_law(spec),
-                paste_law: paste_law(spec),
+                law: interface_law(spec)
+                    .map(|law| with_friction(spec, law))
+                    .transpose()?,
+                paste_law: paste_law(spec)
+                    .map(|law| with_friction(spec, law))
+                    .transpose()?,
                 quadrature: spec.mesh.interface_quadrature,
                 boundary,
             },
         )?;
         let hom = Homogenizer::new(&disc);
         let spd_possible = boundary != BoundaryCondition::Minimal;
-        let linear = LinearSolver::new(&disc.pattern.symbolic, spd_possible)?;
+        let linear = if spec.effects.friction {
+            LinearSolver::for_non_symmetric(&disc.pattern.symbolic, spd_possible)?
+        } else {
+            LinearSolver::new(&disc.pattern.symbolic, spd_possible)?
+        };
         let mut model = Model {
             id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
             scene: scene.clone(),

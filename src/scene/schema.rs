@@ -169,6 +169,18 @@ pub struct MaterialsSpec {
     /// The law of cracks through the paste (`effects.paste_cracking`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub paste_crack: Option<CrackSpec>,
+    /// Coulomb friction on closed cracks (`effects.friction`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionSpec>,
+}
+
+/// `[materials.friction]`: Coulomb friction on the closed cracks of the ITZ and of the
+/// paste, acting on their damaged part (`interface::Frictional`).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// The friction coefficient `mu` (dimensionless, >= 0).
+    pub coefficient: f64,
 }
 
 impl MaterialsSpec {
@@ -204,6 +216,11 @@ pub struct EffectsSpec {
     /// of the scene's fingerprint, so scenes without the key keep theirs.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub paste_cracking: bool,
+    /// Coulomb friction on closed cracks, `materials.friction`'s coefficient: the tangent
+    /// of a sliding point is not symmetric. Off (the default) is left out of the
+    /// fingerprint.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub friction: bool,
 }
 
 impl Default for EffectsSpec {
@@ -212,6 +229,7 @@ impl Default for EffectsSpec {
             cohesive: true,
             contact: true,
             paste_cracking: false,
+            friction: false,
         }
     }
 }

@@ -4,6 +4,8 @@ use super::path::MAX_STRAIN;
 use super::schema::*;
 use crate::error::{require_positive, Error, Result};
 use mesorve_core::geometry::{Explicit, Orientation, RandomSpec, ShapeKind};
+use mesorve_core::interface::ContactShear;
+use mesorve_core::solver::Integration;
 
 /// Densest random packing we attempt; above it random sequential placement jams.
 pub const MAX_AREA_FRACTION: f64 = 0.7;
@@ -74,6 +76,7 @@ impl SceneSpec {
         }
         validate_interface_laws(&self.materials, self.effects.cohesive && has_inclusions)?;
         validate_paste_cracking(&self.effects, &self.materials)?;
+        validate_friction(&self.effects, &self.materials, &self.solver)?;
         if self.effects.paste_cracking && self.solver.step_tolerance.is_some() {
             // The estimate does not yet fall with the step at the paste's brittle drops
             // (docs/fracture.md): a tolerance it cannot hold is refused.
@@ -113,6 +116,68 @@ fn validate_paste_cracking(effects: &EffectsSpec, materials: &MaterialsSpec) -> 
         }
         (None, false) => Ok(()),
     }
+}
+
+/// Friction needs its coefficient, contact, the cohesive ITZ law (and the paste's crack
+/// law, if on) with the shear of a closed crack on the law (`contact_shear =
+/// "cohesive"`: the penalty's would stick it for good), and implicit integration: an
+/// IMPL-EX step is linear through the origin, which a sticking point with slip is not.
+fn validate_friction(
+    effects: &EffectsSpec,
+    materials: &MaterialsSpec,
+    solver: &SolverSpec,
+) -> Result<()> {
+    let spec = match (&materials.friction, effects.friction) {
+        (Some(_), false) => {
+            return Err(Error::scene(
+                "materials.friction",
+                "given, but effects.friction is off: turn it on, or remove the table",
+            ))
+        }
+        (None, true) => {
+            return Err(Error::scene(
+                "materials.friction",
+                "missing: effects.friction is on (give { coefficient })",
+            ))
+        }
+        (None, false) => return Ok(()),
+        (Some(spec), true) => spec,
+    };
+    if !(spec.coefficient.is_finite() && spec.coefficient >= 0.0) {
+        return Err(Error::scene(
+            "materials.friction.coefficient",
+            format!("must be a finite number >= 0, got {}", spec.coefficient),
+        ));
+    }
+    let itz_shear = materials.itz.as_ref().map(|itz| itz.contact_shear);
+    let paste_shear = materials.paste_crack.as_ref().map(|c| c.contact_shear);
+    if !(effects.cohesive && effects.contact) || itz_shear.is_none() {
+        return Err(Error::scene(
+            "effects.friction",
+            "friction acts on closed cracks: it needs effects.cohesive, effects.contact and \
+             the cohesive ITZ law materials.itz",
+        ));
+    }
+    for (key, shear) in [
+        ("materials.itz.contact_shear", itz_shear),
+        ("materials.paste_crack.contact_shear", paste_shear),
+    ] {
+        if shear == Some(ContactShear::Penalty) {
+            return Err(Error::scene(
+                key,
+                "\"penalty\" sticks a closed crack for good; with effects.friction set \
+                 \"cohesive\", so that friction carries the shear of the damaged part",
+            ));
+        }
+    }
+    if solver.integration == Integration::Implex {
+        return Err(Error::scene(
+            "solver.integration",
+            "\"implex\" cannot carry effects.friction: its step is linear through the origin, \
+             and a sticking point with slip is not (docs/fracture.md); use \"implicit\"",
+        ));
+    }
+    Ok(())
 }
 
 /// At most one interface law, one when `required`, each valid (its own checks).

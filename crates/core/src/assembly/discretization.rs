@@ -41,6 +41,9 @@ pub struct SystemEvaluation {
     pub loading: usize,
     pub unloading: usize,
     pub contact: usize,
+    /// Closed points sliding under friction: while any does, the tangent is not
+    /// symmetric.
+    pub sliding: usize,
     /// A hash (FNV-1a) of the branch of every interface point, in order: two evaluations
     /// with the same signature have (but for a hash collision) every point on the same
     /// branch, so the system is smooth between them and Newton's rate is quadratic there.
@@ -336,6 +339,7 @@ impl Discretization {
             counts.loading += resp.loading;
             counts.unloading += resp.unloading;
             counts.contact += resp.contact;
+            counts.sliding += resp.sliding;
             counts.branch_signature =
                 (counts.branch_signature ^ u64::from(resp.branches)).wrapping_mul(FNV_PRIME);
             for (i, &d) in dofs.iter().enumerate() {

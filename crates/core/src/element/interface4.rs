@@ -38,7 +38,8 @@
 //! sign of the minus side afterwards (eqs. 39, 41); here both signs come out of `B`:
 //! `F_A = -F_B` node by node (equilibrium of the element, zero net force and moment) and
 //! `K = [[A, -A], [-A, A]]` with `A = (l_e/2) sum_i w_i (N N^T) (x) R^T C_i R`. `K` is
-//! symmetric because every `C_i` is.
+//! symmetric when every `C_i` is: not at a point that slides under friction
+//! (`interface::Frictional`).
 //!
 //! Because of the block structure only the 4x4 block `A` and the 4-vector
 //! `F_B = (l_e/2) sum_i w_i [N0 t_g; N1 t_g]` (with `t_g = R^T t`) are accumulated.
@@ -146,16 +147,19 @@ impl InterfaceGeometry {
 pub struct InterfaceResponse {
     /// Internal force `F` (8-vector, dof order of the module doc), eqs. 38-39.
     pub force: SVector<f64, 8>,
-    /// Consistent tangent `dF/du` (8x8, symmetric), eqs. 41-47.
+    /// Consistent tangent `dF/du` (8x8, eqs. 41-47): symmetric unless a point slides.
     pub stiffness: SMatrix<f64, 8, 8>,
     /// Number of points on the loading branch (damage growing).
     pub loading: usize,
     /// Number of points on the unloading/reloading branch.
     pub unloading: usize,
-    /// Number of points in contact.
+    /// Number of points in contact, sliding ones included.
     pub contact: usize,
+    /// Number of closed points sliding under friction ([`Branch::Sliding`]), whose
+    /// tangent is not symmetric.
+    pub sliding: usize,
     /// The branch of every point, two bits each from the lowest (point `i` at bits
-    /// `2i..2i+2`): 1 loading, 2 unloading, 3 contact.
+    /// `2i..2i+2`): 1 loading, 2 unloading, 3 contact, 0 sliding.
     pub branches: u8,
 }
 
@@ -299,6 +303,7 @@ struct ElementSums {
     loading: usize,
     unloading: usize,
     contact: usize,
+    sliding: usize,
     branches: u8,
 }
 
@@ -311,6 +316,7 @@ impl ElementSums {
             loading: 0,
             unloading: 0,
             contact: 0,
+            sliding: 0,
             branches: 0,
         }
     }
@@ -330,6 +336,13 @@ impl ElementSums {
             Branch::Contact => {
                 self.contact += 1;
                 3
+            }
+            // Code 0: every point has a code, so the element's byte still tells the
+            // branches apart.
+            Branch::Sliding => {
+                self.contact += 1;
+                self.sliding += 1;
+                0
             }
         };
         self.branches |= code << (2 * point);
@@ -372,6 +385,7 @@ impl ElementSums {
             loading: self.loading,
             unloading: self.unloading,
             contact: self.contact,
+            sliding: self.sliding,
             branches: self.branches,
         }
     }

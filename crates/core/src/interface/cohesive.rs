@@ -275,7 +275,9 @@ impl CohesiveLaw {
             (Branch::Contact, ContactShear::Cohesive) => {
                 Matrix2::new(shear, 0.0, 0.0, point.tangent[(1, 1)])
             }
-            (Branch::Unloading, _) | (Branch::Contact, ContactShear::Penalty) => point.tangent,
+            (Branch::Unloading | Branch::Sliding, _) | (Branch::Contact, ContactShear::Penalty) => {
+                point.tangent
+            }
         }
     }
 
@@ -579,6 +581,13 @@ impl InterfaceLaw for CohesiveLaw {
     fn history_measures(&self, history: &[f64], _length: f64) -> Option<(f64, f64)> {
         let delta_max = history[0];
         Some((-(-delta_max / self.delta_c).exp_m1(), delta_max))
+    }
+
+    /// `beta^2 (e sigma_c/delta_c) D`, `D = 1 - exp(-delta_max/delta_c)`: the virgin shear
+    /// stiffness less the unloading secant's, `beta^2 (K_0 - k(delta_max))`.
+    fn damaged_shear_stiffness(&self, history: &[f64], _length: f64) -> Option<f64> {
+        let damage = -(-history[0] / self.delta_c).exp_m1();
+        Some(self.beta * self.beta * self.initial_stiffness() * damage)
     }
 
     /// With the paper's contact law read from the gap at every evaluation, closed points

@@ -322,6 +322,11 @@ impl InterfaceLaw for CrackLaw {
     fn history_measures(&self, history: &[f64], _length: f64) -> Option<(f64, f64)> {
         Some((1.0 - self.secant(history[0]) / self.stiffness, history[0]))
     }
+
+    /// `beta^2 (K - k(delta_max))`: the virgin shear stiffness times the damage.
+    fn damaged_shear_stiffness(&self, history: &[f64], _length: f64) -> Option<f64> {
+        Some(self.beta * self.beta * (self.stiffness - self.secant(history[0])))
+    }
 }
 
 /// The scene's table of a crack law (`[materials.paste_crack]`): the paste's tensile

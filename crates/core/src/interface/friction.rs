@@ -1,7 +1,6 @@
-//! Coulomb friction on a closed crack: the return mapping of the shear traction of the
-//! damaged part of a closed interface point, with its consistent tangent. A building block
-//! of the laws' friction (`docs/fracture.md`, "Friction: the design for the next step"):
-//! no law calls it yet.
+//! Coulomb friction on closed cracks: the return mapping of the shear traction of the
+//! damaged part of a closed interface point, with its consistent tangent ([`Coulomb`]),
+//! and the law that adds it to the ITZ's or the paste's law ([`Frictional`]).
 //!
 //! With the normal traction `t_n <= 0` of the closed point (`t_n = k_p delta_n`), the
 //! shear stiffness `k` of the stick state and the slip `s` (history), the trial shear
@@ -19,6 +18,26 @@
 //! `k s` instead of the slip (its tractions equal these along any path, checked below);
 //! its stiffness matrix is the elastic `k I` in stick and slip alike, not the consistent
 //! tangent, so a host's Newton converges linearly with it where this one's is quadratic.
+//!
+//! # Friction on the damaged part
+//! Alfano & Sacco split a point into an undamaged part `(1 - D)`, which keeps the
+//! cohesive law, and a damaged part `D`, which carries friction once closed. The laws here
+//! are secant: the undamaged part is the law's own closed response (its normal penalty
+//! and its shear on the secant `k(delta_max)`, `contact_shear = "cohesive"`), and the
+//! damaged part sticks with the stiffness `D K_s = beta^2 (K_0 - k(delta_max))`
+//! ([`InterfaceLaw::damaged_shear_stiffness`]) up to the Coulomb limit: a closed point
+//! sticks with the virgin shear stiffness and a fully open crack, closed, slides at
+//! `mu |t_n|`. `D` is the committed damage, so the law stays a function of its committed
+//! history and the jump, with an exact tangent.
+//!
+//! An open point carries no friction and keeps its slip; at closure `t_n = 0`, so the
+//! Coulomb limit grows from zero and the shear traction stays continuous through the
+//! contact switch.
+
+use std::sync::Arc;
+
+use super::law::{Branch, InterfaceLaw, LawPoint, PointMeasures, TangentKind};
+use crate::error::{require_positive, Error, Result};
 
 /// Coulomb's law with a stick stiffness.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -73,6 +92,199 @@ impl Coulomb {
             slip: shear_jump - traction / self.stiffness,
             sliding: true,
         }
+    }
+}
+
+/// A law with Coulomb friction on the damaged part of its closed points (see the module
+/// docs). Its history is the inner law's followed by the slip `s`.
+#[derive(Debug)]
+pub struct Frictional {
+    inner: Arc<dyn InterfaceLaw>,
+    coefficient: f64,
+}
+
+impl Frictional {
+    /// `inner` with friction of coefficient `coefficient` (`key` names it in errors).
+    /// The inner law must close in contact and give the stiffness of its damaged part.
+    pub fn new(inner: Arc<dyn InterfaceLaw>, coefficient: f64, key: &str) -> Result<Self> {
+        if coefficient != 0.0 {
+            require_positive(key, coefficient)?;
+        }
+        let carries = inner.is_closed([0.0, -1.0])
+            && inner
+                .damaged_shear_stiffness(&vec![0.0; inner.history_len()], 1.0)
+                .is_some();
+        if !carries {
+            return Err(Error::scene(
+                key,
+                "friction acts on closed cracks: the law needs contact (effects.contact) \
+                 with contact_shear = \"cohesive\"",
+            ));
+        }
+        Ok(Frictional { inner, coefficient })
+    }
+
+    /// The friction coefficient `mu`.
+    pub fn coefficient(&self) -> f64 {
+        self.coefficient
+    }
+
+    /// The inner law's part of a point's history.
+    #[inline]
+    fn inner_part<'h>(&self, history: &'h [f64]) -> &'h [f64] {
+        &history[..self.inner.history_len()]
+    }
+}
+
+impl InterfaceLaw for Frictional {
+    /// The inner law's history, then the slip.
+    fn history_len(&self) -> usize {
+        self.inner.history_len() + 1
+    }
+
+    fn respond(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        length: f64,
+        kind: TangentKind,
+    ) -> LawPoint {
+        let closed = self.inner.is_closed(jump);
+        self.respond_as(committed, trial, jump, length, kind, closed)
+    }
+
+    /// As the inner law's: the frictional shear is continuous at closure (the Coulomb
+    /// limit is zero at `delta_n = 0`), so friction needs no held status of its own.
+    fn has_contact_status(&self) -> bool {
+        self.inner.has_contact_status()
+    }
+
+    fn is_closed(&self, jump: [f64; 2]) -> bool {
+        self.inner.is_closed(jump)
+    }
+
+    /// The inner law's response, plus on a closed point the frictional shear `t_f` of
+    /// its damaged part: `t_s += t_f`, `C_ss += d t_f/d delta_s`, `C_sn += d t_f/d
+    /// delta_n` (the normal traction is the penalty's and does not depend on `delta_s`).
+    fn respond_as(
+        &self,
+        committed: &[f64],
+        trial: &mut [f64],
+        jump: [f64; 2],
+        length: f64,
+        kind: TangentKind,
+        closed: bool,
+    ) -> LawPoint {
+        let n = self.inner.history_len();
+        let inner_committed = &committed[..n];
+        let mut point =
+            self.inner
+                .respond_as(inner_committed, &mut trial[..n], jump, length, kind, closed);
+        let slip = committed[n];
+        trial[n] = slip;
+        if !closed {
+            return point;
+        }
+        let stiffness = self
+            .inner
+            .damaged_shear_stiffness(inner_committed, length)
+            .unwrap_or(0.0);
+        if stiffness <= 0.0 {
+            // Nothing is damaged: no friction, and the slip follows the shear jump.
+            trial[n] = jump[0];
+            return point;
+        }
+        let coulomb = Coulomb {
+            coefficient: self.coefficient,
+            stiffness,
+        };
+        let f = coulomb.respond(slip, jump[0], point.traction.y, point.matrix[(1, 1)]);
+        trial[n] = f.slip;
+        point.traction.x += f.traction;
+        match kind {
+            TangentKind::Consistent => {
+                point.matrix[(0, 0)] += f.d_shear;
+                point.matrix[(0, 1)] += f.d_normal;
+            }
+            // The secant of the frictional spring from its committed slip, `t_f / (delta_s
+            // - s)`: the stick stiffness, less once it slides.
+            TangentKind::Secant => {
+                point.matrix[(0, 0)] += if f.sliding {
+                    f.traction / (jump[0] - slip)
+                } else {
+                    stiffness
+                }
+            }
+        }
+        if f.sliding && f.d_normal != 0.0 {
+            point.branch = Branch::Sliding;
+        }
+        point
+    }
+
+    fn passes_peak(&self, start: &[f64], trial: &[f64]) -> bool {
+        self.inner
+            .passes_peak(self.inner_part(start), self.inner_part(trial))
+    }
+
+    /// Open points on a linear branch of the inner law (their slip does not change);
+    /// never a closed one, whose friction is not linear through the origin.
+    fn stays_linear(&self, history: &[f64], jump: [f64; 2], error: [f64; 2], closed: bool) -> bool {
+        !closed
+            && self
+                .inner
+                .stays_linear(self.inner_part(history), jump, error, false)
+    }
+
+    fn traction_scale(&self) -> f64 {
+        self.inner.traction_scale()
+    }
+
+    /// Point by point (the slices may hold several points): the inner law's
+    /// extrapolation, the slip linearly.
+    fn extrapolate(&self, committed: &[f64], previous: &[f64], ratio: f64, out: &mut [f64]) {
+        let n = self.inner.history_len();
+        for ((c, p), o) in committed
+            .chunks(n + 1)
+            .zip(previous.chunks(n + 1))
+            .zip(out.chunks_mut(n + 1))
+        {
+            self.inner.extrapolate(&c[..n], &p[..n], ratio, &mut o[..n]);
+            o[n] = c[n] + ratio * (c[n] - p[n]);
+        }
+    }
+
+    /// Point by point (`history` may hold several points): the inner law's part valid,
+    /// the slip finite.
+    fn history_is_valid(&self, history: &[f64]) -> bool {
+        let n = self.inner.history_len();
+        history.len() % (n + 1) == 0
+            && history
+                .chunks(n + 1)
+                .all(|p| p[n].is_finite() && self.inner.history_is_valid(&p[..n]))
+    }
+
+    fn measures(&self, history: &[f64], jump: [f64; 2], length: f64) -> Option<PointMeasures> {
+        self.inner.measures(self.inner_part(history), jump, length)
+    }
+
+    fn history_measures(&self, history: &[f64], length: f64) -> Option<(f64, f64)> {
+        self.inner
+            .history_measures(self.inner_part(history), length)
+    }
+
+    fn damaged_shear_stiffness(&self, history: &[f64], length: f64) -> Option<f64> {
+        self.inner
+            .damaged_shear_stiffness(self.inner_part(history), length)
+    }
+
+    fn slip(&self, history: &[f64]) -> Option<f64> {
+        history.get(self.inner.history_len()).copied()
+    }
+
+    fn failure_hint(&self, closed_points: usize) -> Option<String> {
+        self.inner.failure_hint(closed_points)
     }
 }
 
@@ -200,5 +412,128 @@ mod tests {
             (work - exact).abs() <= 1e-6 * exact,
             "loop {work} against {exact}"
         );
+    }
+
+    use crate::interface::{ContactShear, CrackLaw};
+    use std::sync::Arc;
+
+    /// A paste crack law (cohesive shear when closed) with friction 0.6.
+    fn frictional() -> (Frictional, CrackLaw) {
+        let crack = CrackLaw {
+            strength: 5.0,
+            fracture_energy: 0.23,
+            stiffness: 6e6,
+            beta: 0.707,
+            penalty: 6e6,
+            contact: true,
+            contact_shear: ContactShear::Cohesive,
+        };
+        let law = Frictional::new(Arc::new(crack), 0.6, "friction").unwrap();
+        (law, crack)
+    }
+
+    fn respond(law: &Frictional, history: [f64; 2], jump: [f64; 2]) -> LawPoint {
+        let mut trial = [0.0; 2];
+        law.respond(&history, &mut trial, jump, 1.0, TangentKind::Consistent)
+    }
+
+    /// The law's consistent tangent against central differences on every branch: open
+    /// loading and unloading, closed and virgin, closed sticking, closed sliding both
+    /// ways with damage partial and complete.
+    #[test]
+    fn frictional_tangent_matches_central_differences() {
+        let (law, crack) = frictional();
+        let (d0, wc) = (crack.peak_opening(), crack.critical_opening());
+        let partial = d0 + 0.2 * wc;
+        let full = d0 + 2.0 * wc;
+        let cases = [
+            ([0.0, 0.0], [0.3 * d0, 0.5 * d0], "open, elastic"),
+            ([partial, 0.0], [0.0, 0.5 * partial], "open, unloading"),
+            (
+                [partial, 0.0],
+                [0.2 * partial, 1.1 * partial],
+                "open, loading",
+            ),
+            ([0.0, 0.0], [0.3 * d0, -0.5 * d0], "closed, virgin"),
+            ([partial, 1e-4], [1.0e-4 + 1e-7, -2e-5], "closed, sticking"),
+            ([partial, 0.0], [0.3 * partial, -2e-5], "closed, sliding +"),
+            ([full, 0.0], [-3e-3, -2e-5], "closed, fully open, sliding -"),
+        ];
+        for (history, jump, what) in cases {
+            let p = respond(&law, history, jump);
+            let h = 1e-6 * (jump[0].abs() + jump[1].abs());
+            for j in 0..2 {
+                let mut plus = jump;
+                let mut minus = jump;
+                plus[j] += h;
+                minus[j] -= h;
+                let fd = (respond(&law, history, plus).traction
+                    - respond(&law, history, minus).traction)
+                    / (2.0 * h);
+                for i in 0..2 {
+                    let scale = p.matrix.abs().max().max(1e-300);
+                    let err = (p.matrix[(i, j)] - fd[i]).abs() / scale;
+                    assert!(
+                        err <= 1e-6,
+                        "{what}: C[{i}{j}] {} fd {} ({err:e})",
+                        p.matrix[(i, j)],
+                        fd[i]
+                    );
+                }
+            }
+        }
+        let sliding = respond(&law, [partial, 0.0], [0.3 * partial, -2e-5]);
+        assert_eq!(sliding.branch, Branch::Sliding);
+        assert!(
+            sliding.matrix[(0, 1)] != sliding.matrix[(1, 0)],
+            "sliding is not symmetric"
+        );
+    }
+
+    /// A fully open crack, closed at `t_n`, sticks with the virgin shear stiffness until
+    /// `|t_s| = mu |t_n|`, then slides there; the slip is the jump beyond the stick one.
+    #[test]
+    fn a_fully_open_crack_sticks_then_slides_at_mu_t_n() {
+        let (law, crack) = frictional();
+        let full = crack.peak_opening() + 2.0 * crack.critical_opening();
+        let dn = -1e-5;
+        let tau = 0.6 * crack.penalty * 1e-5;
+        let k = crack.beta * crack.beta * (crack.stiffness - crack.secant(full));
+        let stick = respond(&law, [full, 0.0], [0.5 * tau / k, dn]);
+        assert_eq!(stick.branch, Branch::Contact);
+        let cohesive = crack.secant(full) * crack.beta * crack.beta;
+        assert!((stick.traction.x - (k + cohesive) * 0.5 * tau / k).abs() <= 1e-12 * tau);
+        let ds = 4.0 * tau / k;
+        let mut trial = [0.0; 2];
+        let slide = law.respond(
+            &[full, 0.0],
+            &mut trial,
+            [ds, dn],
+            1.0,
+            TangentKind::Consistent,
+        );
+        assert_eq!(slide.branch, Branch::Sliding);
+        assert!((slide.traction.x - tau - cohesive * ds).abs() <= 1e-9 * tau);
+        assert!((trial[1] - (ds - tau / k)).abs() <= 1e-12 * ds);
+        // Opened again: no friction, the slip kept.
+        let mut reopened = [0.0; 2];
+        let open = law.respond(
+            &trial,
+            &mut reopened,
+            [ds, 1e-6],
+            1.0,
+            TangentKind::Consistent,
+        );
+        assert!(open.traction.x.abs() <= 1e-6 * tau);
+        assert_eq!(reopened[1], trial[1]);
+    }
+
+    /// Friction needs a law that closes: contact off is refused.
+    #[test]
+    fn friction_without_contact_is_refused() {
+        let (_, mut crack) = frictional();
+        crack.contact = false;
+        let err = Frictional::new(Arc::new(crack), 0.6, "materials.friction").unwrap_err();
+        assert!(err.to_string().contains("materials.friction"), "{err}");
     }
 }

@@ -15,8 +15,9 @@ pub enum TangentKind {
     /// The consistent tangent `dt/d delta` (eqs. 45-47 for the paper's law).
     #[default]
     Consistent,
-    /// A secant matrix `S` with `t = S delta`, positive definite: for the secant
-    /// iterations of the solver.
+    /// A positive definite matrix for the secant iterations of the solver: `S` with
+    /// `t = S delta` for a law without friction; a law with friction puts its stick
+    /// stiffness for the frictional shear (the residual always takes the traction).
     Secant,
 }
 
@@ -28,8 +29,11 @@ pub enum Branch {
     /// A reversible branch with the history unchanged (unloading to the origin, eq. 24;
     /// every point of a law without history).
     Unloading,
-    /// Contact of a closed point (eqs. 36-37).
+    /// Contact of a closed point (eqs. 36-37), sticking if the law has friction.
     Contact,
+    /// A closed point sliding at the Coulomb limit of a law with friction
+    /// ([`super::Frictional`]): its consistent tangent is not symmetric.
+    Sliding,
 }
 
 /// The response of a law at one point for a trial jump.
@@ -37,7 +41,8 @@ pub enum Branch {
 pub struct LawPoint {
     /// Local traction `[t_s, t_n]`.
     pub traction: Vector2<f64>,
-    /// The matrix of the requested [`TangentKind`], symmetric.
+    /// The matrix of the requested [`TangentKind`]: symmetric, but for the consistent
+    /// tangent of a [`Branch::Sliding`] point.
     pub matrix: Matrix2<f64>,
     pub branch: Branch,
 }
@@ -191,6 +196,20 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
     fn history_measures(&self, history: &[f64], length: f64) -> Option<(f64, f64)> {
         self.measures(history, [0.0, 0.0], length)
             .map(|m| (m.damage, m.max_opening))
+    }
+
+    /// The shear stiffness per unit area that the damaged part of a closed point with
+    /// `history` carries while it sticks: `D K_s`, with `D` the damage of
+    /// [`InterfaceLaw::history_measures`] and `K_s` the virgin shear stiffness (Alfano &
+    /// Sacco 2006: friction acts on the damaged part). `None`: the law cannot carry
+    /// friction (the default).
+    fn damaged_shear_stiffness(&self, _history: &[f64], _length: f64) -> Option<f64> {
+        None
+    }
+
+    /// The frictional slip of a point with `history`, for a law with friction.
+    fn slip(&self, _history: &[f64]) -> Option<f64> {
+        None
     }
 
     /// Something to add to the message of a failed solve whose last iterate has

@@ -16,6 +16,7 @@ mod contact;
 pub mod fast_path;
 pub mod implex;
 mod increment;
+mod lu;
 mod newton;
 mod predictor;
 mod problem;

@@ -116,6 +116,7 @@ impl Problem<'_> {
             &self.disc.pattern.symbolic,
             &ws.current.k,
             use_,
+            ws.current.counts.sliding == 0,
         )
     }
 

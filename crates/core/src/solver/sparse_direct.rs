@@ -26,6 +26,14 @@
 //! allocation per iteration once they have grown (first call), except inside faer's
 //! supernodal LU.
 //!
+//! A non-symmetric matrix ([`FactorMethod::Lu`]) is factorized first by the supernodal LU
+//! without pivoting of `super::lu`, on a structure fixed by an analysis of the pattern of
+//! `A + A^T` (AMD): its buffers are sized once, so it allocates nothing, and its
+//! arithmetic is twice an LDL^T's. Without pivoting it is checked by the same probe
+//! solve as the indefinite LDL^T; when the probe fails, or a pivot is zero, faer's
+//! pivoted LU takes over (and allocates). `NumericFactor::static_lu_count` and
+//! `lu_count` count the two.
+//!
 //! LDL^T and LBL^T call faer's supernodal numeric kernels directly, on the lower triangle
 //! of the AMD-permuted matrix, gathered through a map computed once per model
 //! ([`PermutedLower`]): faer's `SymbolicCholesky::factorize_numeric_*` would permute the
@@ -45,6 +53,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
+use super::lu::{StaticLu, StaticLuFactor};
 use super::supernodal_solve;
 use crate::error::{LinearAlgebraError, Result};
 
@@ -57,6 +66,9 @@ pub enum FactorKind {
     LdltIndefinite,
     /// Symmetric indefinite, pivoted within supernodes, checked by a probe solve.
     Lblt,
+    /// LU: with [`FactorMethod::Lu`] the LU without pivoting on the fixed structure
+    /// (`super::lu`), checked by a probe solve, else faer's LU with partial pivoting
+    /// (`NumericFactor::static_lu_count` and `lu_count` tell which).
     Lu,
 }
 
@@ -70,6 +82,10 @@ pub const PROBE_TOLERANCE: f64 = 1e-10;
 /// Numeric factors, per workspace.
 pub struct NumericFactor {
     lu: NumericLu<usize, f64>,
+    /// Factors of the LU without pivoting (`None` for an empty system).
+    static_lu: Option<StaticLuFactor>,
+    /// Whether an LU factorization is in `static_lu` rather than in `lu`.
+    static_lu_current: bool,
     /// LDL^T or LBL^T factor values (same symbolic structure).
     l_values: Vec<f64>,
     /// The matrix's values on [`PermutedLower`]'s pattern, the kernels' input.
@@ -88,10 +104,15 @@ pub struct NumericFactor {
     /// Numeric factorizations of any kind done with these buffers so far (an LDL^T that
     /// fails its check is part of the LBL^T or LU that follows it).
     pub count: u64,
-    /// LU factorizations done with these buffers so far. faer's supernodal LU allocates
-    /// internally (LDL^T and LBL^T do not), so this counts the updates that left the
-    /// allocation-free path.
+    /// faer's LU factorizations with partial pivoting done with these buffers so far: the
+    /// last resort of [`FactorMethod::SymmetricFirst`], and of [`FactorMethod::Lu`] when
+    /// the LU without pivoting fails its check. faer's supernodal LU allocates internally
+    /// (every other factorization here does not), so this counts the factorizations that
+    /// left the allocation-free path.
     pub lu_count: u64,
+    /// LU factorizations without pivoting ([`FactorMethod::Lu`]) accepted by the probe
+    /// check so far; they allocate nothing.
+    pub static_lu_count: u64,
     /// Indefinite LDL^T factorizations accepted by the probe check so far.
     pub indefinite_ldlt_count: u64,
     /// LBL^T factorizations accepted by the probe check so far.
@@ -107,13 +128,16 @@ pub struct NumericFactor {
 pub enum FactorMethod {
     /// LDL^T first (when the pattern allows it), then LBL^T, then LU.
     SymmetricFirst,
-    /// LU only.
+    /// LU only, for a matrix that may be non-symmetric: the LU without pivoting, checked,
+    /// then faer's LU with partial pivoting.
     Lu,
 }
 
 /// Symbolic analyses of one pattern, shared by every instance of a model.
 pub struct LinearSolver {
     lu: SymbolicLu<usize>,
+    /// The analysis of the LU without pivoting (`None` for an empty system).
+    static_lu: Option<StaticLu>,
     /// `None` when the system can never be positive definite (minimal BC multipliers).
     /// The symmetric analysis that LDL^T and LBL^T share.
     symmetric: Option<SymmetricAnalysis>,
@@ -197,17 +221,38 @@ impl PermutedLower {
 
 impl LinearSolver {
     /// Analyses `pattern` (COLAMD for LU, AMD for LDL^T). `spd_possible` is false for
-    /// saddle-point systems.
+    /// saddle-point systems. Without the analysis of [`LinearSolver::for_non_symmetric`],
+    /// [`FactorMethod::Lu`] is faer's pivoted LU.
     pub fn new(pattern: &SymbolicSparseColMat<usize>, spd_possible: bool) -> Result<Self> {
-        // Supernodal where faer chooses it: simplicial LU would allocate nothing but is
-        // much slower on these patterns (`docs/solver.md`), and LU only runs on
-        // indefinite tangents, past the peak.
+        let mut solver = Self::analysed(pattern, spd_possible)?;
+        solver.static_lu = None;
+        Ok(solver)
+    }
+
+    /// [`LinearSolver::new`] for a model whose matrices may be non-symmetric (friction):
+    /// also the structure of the allocation-free LU of `lu.rs`, whose buffers every
+    /// workspace then holds.
+    pub fn for_non_symmetric(
+        pattern: &SymbolicSparseColMat<usize>,
+        spd_possible: bool,
+    ) -> Result<Self> {
+        Self::analysed(pattern, spd_possible)
+    }
+
+    fn analysed(pattern: &SymbolicSparseColMat<usize>, spd_possible: bool) -> Result<Self> {
+        // faer's pivoted LU, the last resort: supernodal where faer chooses it. Simplicial
+        // LU would allocate nothing once its buffers hold the largest fill met, but is
+        // much slower on these patterns (`docs/solver.md`).
         let lu = factorize_symbolic_lu(pattern.as_ref(), Default::default()).map_err(|e| {
             LinearAlgebraError::Analysis {
                 factorization: "LU",
                 reason: format!("{e:?}"),
             }
         })?;
+        let static_lu = match pattern.nrows() {
+            0 => None,
+            _ => Some(StaticLu::new(pattern)?),
+        };
         let symmetric = if spd_possible && pattern.nrows() > 0 {
             let symbolic = factorize_symbolic_cholesky(
                 pattern.as_ref(),
@@ -245,14 +290,20 @@ impl LinearSolver {
         } else {
             None
         };
-        Ok(LinearSolver { lu, symmetric })
+        Ok(LinearSolver {
+            lu,
+            static_lu,
+            symmetric,
+        })
     }
 
     /// Empty numeric buffers for this solver.
     pub fn numeric(&self) -> NumericFactor {
-        let n = self.symmetric.as_ref().map_or(0, |c| c.symbolic.nrows());
+        let n = self.lu.nrows();
         NumericFactor {
             lu: NumericLu::new(),
+            static_lu: self.static_lu.as_ref().map(StaticLu::numeric),
+            static_lu_current: false,
             l_values: vec![0.0; self.symmetric.as_ref().map_or(0, |c| c.symbolic.len_val())],
             permuted_values: vec![
                 0.0;
@@ -274,6 +325,7 @@ impl LinearSolver {
             current: None,
             count: 0,
             lu_count: 0,
+            static_lu_count: 0,
             indefinite_ldlt_count: 0,
             lblt_count: 0,
             solves: [0; 5],
@@ -307,8 +359,9 @@ impl LinearSolver {
 
     /// Factorizes the matrix with `values` on `pattern`: with
     /// [`FactorMethod::SymmetricFirst`] LDL^T (accepted at once if positive definite, else
-    /// checked), else a checked LBL^T, else LU; with [`FactorMethod::Lu`] LU. Returns the
-    /// kind used.
+    /// checked), else a checked LBL^T, else LU with partial pivoting; with
+    /// [`FactorMethod::Lu`] the checked LU without pivoting, else LU with partial pivoting.
+    /// Returns the kind used.
     pub fn factorize(
         &self,
         pattern: &SymbolicSparseColMat<usize>,
@@ -318,6 +371,7 @@ impl LinearSolver {
         stack: &mut MemStack,
     ) -> std::result::Result<FactorKind, LinearAlgebraError> {
         numeric.current = None;
+        numeric.static_lu_current = false;
         numeric.count += 1;
         let a = SparseColMatRef::new(pattern.as_ref(), values);
         if let (FactorMethod::SymmetricFirst, Some(c)) = (method, &self.symmetric) {
@@ -334,6 +388,12 @@ impl LinearSolver {
                 numeric.lblt_count += 1;
                 return Ok(FactorKind::Lblt);
             }
+        }
+        if method == FactorMethod::Lu && self.static_lu_checked(a, numeric, stack) {
+            numeric.current = Some(FactorKind::Lu);
+            numeric.static_lu_current = true;
+            numeric.static_lu_count += 1;
+            return Ok(FactorKind::Lu);
         }
         self.lu
             .factorize_numeric_lu(&mut numeric.lu, a, Par::Seq, stack, Default::default())
@@ -380,6 +440,29 @@ impl LinearSolver {
             }
             PivotSigns::Singular => None,
         }
+    }
+
+    /// LU without pivoting of `a` into `numeric.static_lu`, accepted only if no pivot is
+    /// zero and a probe solve is accurate (see the module docs).
+    fn static_lu_checked(
+        &self,
+        a: SparseColMatRef<'_, usize, f64>,
+        numeric: &mut NumericFactor,
+        stack: &mut MemStack,
+    ) -> bool {
+        let (Some(lu), Some(factor)) = (&self.static_lu, &mut numeric.static_lu) else {
+            return false;
+        };
+        if !lu.factorize(a.val(), factor) {
+            return false;
+        }
+        probe_solve_is_accurate(
+            a,
+            &mut numeric.probe,
+            &mut numeric.probe_image,
+            |rhs, _| lu.solve(factor, rhs, 1),
+            stack,
+        )
     }
 
     /// Intranode LBL^T of `a` into `numeric`, accepted only if a probe solve is accurate
@@ -439,6 +522,12 @@ impl LinearSolver {
             numeric.current,
             Some(FactorKind::Ldlt | FactorKind::LdltIndefinite)
         );
+        if let (Some(FactorKind::Lu), true) = (numeric.current, numeric.static_lu_current) {
+            if let (Some(lu), Some(factor)) = (&self.static_lu, &mut numeric.static_lu) {
+                lu.solve(factor, rhs, ncols);
+            }
+            return;
+        }
         if let (true, 1, Some(c)) = (ldlt, ncols, &self.symmetric) {
             // One column: plain loops (`supernodal_solve`); faer's kernels pay off from
             // three columns on (measured in docs/solver.md).
@@ -603,15 +692,24 @@ mod tests {
         values: Vec<f64>,
         spd_possible: bool,
     ) -> Factorized {
-        let linear = LinearSolver::new(&pattern, spd_possible).unwrap();
+        factorized_by(pattern, values, spd_possible, FactorMethod::SymmetricFirst)
+    }
+
+    fn factorized_by(
+        pattern: SymbolicSparseColMat<usize>,
+        values: Vec<f64>,
+        spd_possible: bool,
+        method: FactorMethod,
+    ) -> Factorized {
+        let linear = LinearSolver::for_non_symmetric(&pattern, spd_possible).unwrap();
         let mut numeric = linear.numeric();
-        let mut stack = MemBuffer::new(linear.scratch(1));
+        let mut stack = MemBuffer::new(linear.scratch(4));
         let kind = linear
             .factorize(
                 &pattern,
                 &values,
                 &mut numeric,
-                FactorMethod::SymmetricFirst,
+                method,
                 MemStack::new(&mut stack),
             )
             .unwrap();
@@ -778,6 +876,92 @@ mod tests {
                 assert!(rel < 1e-13, "shift {shift}, width {width}: {rel:e}");
             }
         }
+    }
+
+    /// A shifted Laplacian with a convection term `c (x_{k+1} - x_{k-1})` along the grid's
+    /// rows and columns: non-symmetric, with the Laplacian's pattern.
+    fn convection_diffusion(
+        m: usize,
+        shift: f64,
+        c: f64,
+    ) -> (SymbolicSparseColMat<usize>, Vec<f64>) {
+        let (pattern, mut values) = shifted_laplacian(m, shift);
+        let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+        for j in 0..pattern.ncols() {
+            for k in cp[j]..cp[j + 1] {
+                match ri[k].cmp(&j) {
+                    std::cmp::Ordering::Less => values[k] += c,
+                    std::cmp::Ordering::Greater => values[k] -= c,
+                    std::cmp::Ordering::Equal => {}
+                }
+            }
+        }
+        (pattern, values)
+    }
+
+    /// Definite (`A + A^T` positive definite) and indefinite (shift 1.3, as for the checked
+    /// LDL^T: worse conditioned, so the error bound is looser) non-symmetric matrices,
+    /// with and without the symmetric analysis.
+    #[test]
+    fn non_symmetric_matrix_is_solved_by_lu_without_pivoting() {
+        for (shift, spd_possible, bound) in
+            [(0.0, true, 1e-12), (0.0, false, 1e-12), (1.3, true, 1e-10)]
+        {
+            let (pattern, values) = convection_diffusion(20, shift, 0.3);
+            let mut f = factorized_by(pattern, values, spd_possible, FactorMethod::Lu);
+            assert_eq!(f.kind, FactorKind::Lu);
+            assert_eq!((f.numeric.static_lu_count, f.numeric.lu_count), (1, 0));
+            let err = f.relative_solve_error();
+            assert!(err < bound, "shift {shift}: error {err:e}");
+        }
+    }
+
+    /// A dense non-symmetric matrix: one supernode, wider than the plain-loop block of
+    /// `lu::lu_in_place`, so its recursive split runs; solved for several columns.
+    #[test]
+    fn dense_non_symmetric_matrix_is_solved_for_several_columns() {
+        let n = 90;
+        let mut entries = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let v = ((i * 7 + j * 13) % 17) as f64 / 17.0 - 0.5
+                    + if i == j { n as f64 } else { 0.0 };
+                entries.push((i, j, v));
+            }
+        }
+        let (pattern, values) = from_triplets(n, &entries);
+        let mut f = factorized_by(pattern, values, true, FactorMethod::Lu);
+        assert_eq!((f.kind, f.numeric.static_lu_count), (FactorKind::Lu, 1));
+        let exact: Vec<f64> = (0..3 * n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+        let a = SparseColMatRef::new(f.pattern.as_ref(), &f.values);
+        let mut x = vec![0.0; 3 * n];
+        for (x, p) in x.chunks_exact_mut(n).zip(exact.chunks_exact(n)) {
+            add_product(a, 1.0, p, x);
+        }
+        f.linear
+            .solve_in_place(&mut f.numeric, &mut x, 3, MemStack::new(&mut f.stack));
+        let err: f64 = x.iter().zip(&exact).map(|(a, b)| (a - b).powi(2)).sum();
+        let err = err.sqrt() / norm(&exact);
+        assert!(err < 1e-12, "error {err:e}");
+    }
+
+    /// Zero diagonal entries stop the LU without pivoting: faer's pivoted LU takes over.
+    #[test]
+    fn zero_pivot_falls_back_to_pivoted_lu() {
+        let (pattern, mut values) = small_diagonal(6, 0.0);
+        let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+        for j in 0..pattern.ncols() {
+            for k in cp[j]..cp[j + 1] {
+                if ri[k] < j {
+                    values[k] *= 1.5;
+                }
+            }
+        }
+        let mut f = factorized_by(pattern, values, true, FactorMethod::Lu);
+        assert_eq!(f.kind, FactorKind::Lu);
+        assert_eq!((f.numeric.static_lu_count, f.numeric.lu_count), (0, 1));
+        let err = f.relative_solve_error();
+        assert!(err < 1e-12, "error {err:e}");
     }
 
     #[test]

@@ -137,7 +137,7 @@ fn substitute(s: &SymbolicSupernodalCholesky<usize>, l: &[f64], y: &mut [f64], t
 
 /// `a . b` with four partial sums (lets the compiler vectorize it).
 #[inline(always)]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
     let tail: f64 = a4
         .remainder()

@@ -13,6 +13,12 @@
 //!   they stop when that is below [`TANGENT_ACCURACY`];
 //! - only when [`TANGENT_SWEEPS`] sweeps cannot reach it is the converged `K` factorized
 //!   once more.
+//!
+//! With a point sliding under friction `K` is not symmetric: the variational form's
+//! quadratic error needs the adjoint `K^-T G`, and the product of the sweeps reads `K`
+//! as symmetric, so the sweeps are skipped and a `K` that is not bitwise the factorized
+//! one is factorized (by LU). `C = G^T K^-1 G` itself holds for any `K` (the macro strain
+//! loads the RVE through the bulk alone, `G`), and is not symmetric then.
 
 use super::problem::{norm, Problem};
 use super::workspace::{FactorUse, Workspace};
@@ -70,6 +76,10 @@ pub(super) fn condensed_tangent(problem: &Problem, ws: &mut Workspace) -> Result
 fn from_last_factorization(problem: &Problem, ws: &mut Workspace) -> Option<[f64; 9]> {
     let (g, linear) = (&problem.disc.g, problem.linear);
     let unchanged = ws.factorization.factorizes(&ws.current.k);
+    let symmetric = ws.factorization.is_symmetric() && ws.current.counts.sliding == 0;
+    if !(unchanged || symmetric) {
+        return None;
+    }
     ws.factorization.solve_g(linear, g);
     if unchanged {
         return Some(condensed(g, ws.factorization.kg(), None));

@@ -56,6 +56,8 @@ pub struct Factorization {
     kg: Vec<f64>,
     /// True when `kg` is exactly `K_f^-1 G` for the current factors.
     kg_of_factor: bool,
+    /// Whether the factorized matrix is symmetric (no point slides under friction).
+    symmetric: bool,
 }
 
 impl Factorization {
@@ -67,6 +69,7 @@ impl Factorization {
             consistent: false,
             kg: vec![0.0; 3 * n],
             kg_of_factor: false,
+            symmetric: true,
         }
     }
 
@@ -74,21 +77,30 @@ impl Factorization {
     /// tangent whose factors chord corrections and the condensed tangent may reuse (the
     /// values are then kept, to recognise an unchanged tangent); [`FactorUse::OneUse`]: the
     /// factors serve one purpose only (a secant matrix, a path direction). Whatever
-    /// depended on the previous factors is invalidated.
+    /// depended on the previous factors is invalidated. `symmetric`: whether the matrix
+    /// is; LDL^T and LBL^T read its lower triangle only, so a matrix that is not (a point
+    /// sliding under friction) is factorized by LU.
     pub fn factorize(
         &mut self,
         linear: &LinearSolver,
         pattern: &SymbolicSparseColMat<usize>,
         values: &[f64],
         use_: FactorUse,
+        symmetric: bool,
     ) -> Result<FactorKind, LinearAlgebraError> {
         self.kg_of_factor = false;
         self.consistent = false;
+        self.symmetric = symmetric;
+        let method = if symmetric {
+            FactorMethod::SymmetricFirst
+        } else {
+            FactorMethod::Lu
+        };
         let kind = linear.factorize(
             pattern,
             values,
             &mut self.numeric,
-            FactorMethod::SymmetricFirst,
+            method,
             MemStack::new(&mut self.stack),
         )?;
         if use_ == FactorUse::Reusable {
@@ -108,6 +120,11 @@ impl Factorization {
     /// Whether the factors are those of a reusable consistent tangent.
     pub(super) fn is_reusable(&self) -> bool {
         self.consistent
+    }
+
+    /// Whether the factorized matrix was symmetric.
+    pub(super) fn is_symmetric(&self) -> bool {
+        self.symmetric
     }
 
     /// Whether the factors are those of exactly the consistent tangent `k`.
