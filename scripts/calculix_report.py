@@ -13,6 +13,14 @@
       the residual history of the hardest increment, and the force-displacement curve of
       each run, as Markdown.
 
+  calculix_report.py friction JOB MU
+      calculix_examples/friction_shear.inp (a closed crack under a held normal force,
+      sheared through an elastic element): every increment of steps 3 and 4 must keep
+      sigma_xx of element 1 at its first value and |sigma_xy| <= MU |sigma_xx|, and each
+      step must end sliding, |sigma_xy| = MU |sigma_xx|, all to FRICTION_TOLERANCE (ccx
+      prints 7 digits). Prints one Markdown line: ccx's iterations per step, the largest,
+      the increments above ccx's minimum of 2.
+
   calculix_report.py iterations STEP LABEL=JOB ...
       ccx's Newton iterations of every increment of step STEP, one column per run, and
       the force residuals of each run's increment with the most iterations, as Markdown.
@@ -78,7 +86,7 @@
 """
 import sys
 
-from kit.ccx import cvg, dat_blocks, sta
+from kit.ccx import cvg, dat_blocks, dat_points, sta
 
 TOLERANCE = 1e-6
 DROP = 0.01
@@ -502,6 +510,38 @@ def control(job, plain, smallest):
     if failures:
         sys.exit("calculix_report.py control: " + "; ".join(failures))
 
+FRICTION_TOLERANCE = 2e-6
+
+
+def friction(job, mu):
+    points = dat_points(job + ".dat", "stresses")
+    times = sorted(t for t in points if t > 2.0)
+    first = points[times[0]][(1, 1)][0]
+    failures = []
+    for t in times:
+        for (element, point), s in points[t].items():
+            sxx, sxy = s[0], s[3]
+            if element != 1:
+                continue
+            if abs(sxx - first) > FRICTION_TOLERANCE * abs(first):
+                failures.append(f"t {t}: sigma_xx {sxx} moved from {first}")
+            if abs(sxy) > mu * abs(sxx) * (1 + FRICTION_TOLERANCE):
+                failures.append(f"t {t}: |sigma_xy| {sxy} above mu |sigma_xx|")
+            if t in (3.0, 4.0) and abs(abs(sxy) - mu * abs(sxx)) > FRICTION_TOLERANCE * abs(sxx):
+                failures.append(f"t {t}: not sliding, sigma_xy {sxy}, sigma_xx {sxx}")
+    rows = [r for r in sta(job) if r[0] in (3, 4) and r[3]]
+    if len({r[0] for r in rows}) != 2 or not times or max(times) < 4.0 - 1e-9:
+        failures.append("steps 3 and 4 did not finish")
+    if failures:
+        sys.exit("calculix_report.py friction: " + "; ".join(failures[:5]))
+    per_step = {k: sum(r[4] for r in rows if r[0] == k) for k in (3, 4)}
+    counts = {k: sum(1 for r in rows if r[0] == k) for k in (3, 4)}
+    above = [f"{r[0]}.{r[1]}: {r[4]}" for r in rows if r[4] > 2]
+    print(f"sliding at mu |sigma_xx| = {mu * abs(first):.6g} MPa; ccx iterations: step 3 "
+          f"{per_step[3]} in {counts[3]} increments, step 4 {per_step[4]} in {counts[4]}, "
+          f"at most {max(r[4] for r in rows)}; above 2: {', '.join(above) or 'none'}")
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "homogeneous":
         homogeneous(sys.argv[2], sys.argv[3])
@@ -526,5 +566,7 @@ if __name__ == "__main__":
         band(sys.argv[2])
     elif sys.argv[1] == "snap":
         snap(sys.argv[2], sys.argv[3:])
+    elif sys.argv[1] == "friction":
+        friction(sys.argv[2], float(sys.argv[3]))
     else:
         sys.exit(__doc__)

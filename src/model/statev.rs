@@ -6,7 +6,7 @@ use std::borrow::Cow;
 
 use super::rve_model::Model;
 use crate::error::{Error, Result};
-use mesorve_core::solver::{implex, ContactStatus, Integration, Workspace};
+use mesorve_core::solver::{equilibrium_unknowns, implex, ContactStatus, Integration, Workspace};
 use mesorve_core::state::persist::StateSizes;
 use mesorve_core::state::statev::{Core, CoreView};
 use mesorve_core::state::{held_contact_words, State};
@@ -94,7 +94,8 @@ impl Model {
     /// The full state a committed `core` stands for (`None`: the virgin state), a function
     /// of the core alone, so that a host's restart, cut-back or new analysis gives what the
     /// uninterrupted run gives from the same values. Implicit integration forms the
-    /// fluctuation by one secant solve (`implex::secant_unknowns`) and the points held
+    /// fluctuation by one secant solve (`implex::secant_unknowns`; with friction by Newton
+    /// at the core's strain with its history, `equilibrium_unknowns`) and the points held
     /// against their gap; IMPL-EX needs no fluctuation (its step solves for it). No
     /// sensitivity, path curvature or fast-path data: the next update starts from the
     /// elastic predictor.
@@ -117,7 +118,12 @@ impl Model {
             return Err(Error::WorkspaceMismatch);
         }
         let mut unknowns = std::mem::take(&mut state.unknowns);
-        implex::secant_unknowns(&self.problem(), &state, &core.strain, ws, &mut unknowns)?;
+        if self.scene.spec.effects.friction {
+            // Friction's slip offsets a sticking point from the origin: no secant solve.
+            equilibrium_unknowns(&self.problem(), &state, &core.strain, ws, &mut unknowns)?;
+        } else {
+            implex::secant_unknowns(&self.problem(), &state, &core.strain, ws, &mut unknowns)?;
+        }
         state.unknowns = unknowns;
         let held = self.solver.contact_status == ContactStatus::ActiveSet
             && self

@@ -29,6 +29,7 @@ mod workspace;
 
 pub use increment::solve_increment;
 pub use increment::Solved;
+pub use newton::equilibrium_unknowns;
 pub use problem::Problem;
 pub use problem::Strain;
 pub use settings::{Answer, ContactStatus, IncrementReport, Integration, Settings, TangentRequest};

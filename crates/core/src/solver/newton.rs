@@ -38,7 +38,9 @@ use super::contact;
 use super::problem::{accept_candidate, norm, Problem, Strain};
 use super::settings::Settings;
 use super::workspace::{FactorUse, Workspace};
+use crate::error::Error;
 use crate::interface::TangentKind;
+use crate::state::State;
 
 /// How a Newton loop globalizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -488,4 +490,57 @@ fn step(
         *t = xi + alpha * di;
     }
     problem.evaluate_candidate(strain, kind, ws);
+}
+
+/// The fluctuation in equilibrium at `strain` with `state`'s history as the committed
+/// one, by Newton with the line search from the guess in `unknowns`, every point's
+/// contact status read from its gap. For a converged state that the secant solve
+/// (`implex::secant_unknowns`) cannot rebuild from its history: a closed point sticking
+/// under friction is on a branch offset from the origin by its slip, and at the converged
+/// jump its committed slip puts it on the Coulomb limit with the converged traction.
+pub fn equilibrium_unknowns(
+    problem: &Problem,
+    state: &State,
+    strain: &Strain,
+    ws: &mut Workspace,
+    unknowns: &mut [f64],
+) -> crate::error::Result<()> {
+    ws.history_start.copy_from_slice(&state.history);
+    ws.contact.held = false;
+    let tolerance = problem.settings.tolerance * problem.reference(strain);
+    problem.evaluate(unknowns, strain, TangentKind::Consistent, ws);
+    let mut rnorm = norm(&ws.current.r);
+    for _ in 0..problem.settings.max_iterations {
+        if rnorm <= tolerance {
+            return Ok(());
+        }
+        problem
+            .factorize(ws, FactorUse::OneUse)
+            .map_err(|e| Error::Solve {
+                reason: format!("singular RVE matrix rebuilding a state ({e:?})"),
+                depth: 0,
+                suggested_step_ratio: 0.5,
+            })?;
+        ws.dx
+            .iter_mut()
+            .zip(&ws.current.r)
+            .for_each(|(d, r)| *d = -r);
+        ws.factorization.solve(problem.linear, &mut ws.dx, 1);
+        rnorm = line_search(problem, strain, unknowns, rnorm, true, ws);
+        unknowns.copy_from_slice(&ws.x_try);
+        accept_candidate(ws);
+    }
+    if rnorm <= tolerance {
+        return Ok(());
+    }
+    Err(Error::Solve {
+        reason: format!(
+            "rebuilding a state: no equilibrium with its history in {} iterations (relative \
+             residual {:.3e})",
+            problem.settings.max_iterations,
+            rnorm / problem.reference(strain)
+        ),
+        depth: 0,
+        suggested_step_ratio: 0.5,
+    })
 }
