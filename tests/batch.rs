@@ -151,7 +151,7 @@ fn a_failing_point_fails_alone() {
 fn the_report_carries_the_error_estimate() {
     let text = std::fs::read_to_string(SCENE).unwrap().replace(
         "integration = \"implex\"\n",
-        "integration = \"implex\"\nstep_tolerance = 0.01\n",
+        "integration = \"implex\"\nstep_tolerance = 0.01\nsmallest_step = 1e-3\n",
     );
     let scene = Scene::from_toml_str(&text, env!("CARGO_MANIFEST_DIR")).unwrap();
     let model = Arc::new(Model::from_scene(&scene).unwrap());

@@ -21,6 +21,19 @@ fn implex_text(extra: &str) -> String {
     )])
 }
 
+/// The §5.2.1 path's increment, as a strain norm (the time `rve run` passes).
+const INCREMENT: f64 = 2.2e-4 / 20.0;
+
+/// `solver.step_tolerance = tolerance` with a floor (which the scene requires) below
+/// `rve run`'s own smallest step (1/1024 of the path's increment) and below any step
+/// these tests take: the control as if it had none.
+fn control(tolerance: f64) -> String {
+    format!(
+        "step_tolerance = {tolerance}\nsmallest_step = {:e}\n",
+        INCREMENT / 16384.0
+    )
+}
+
 /// The §5.2.1 path, each increment's time its strain norm (as `rve run` passes it), every
 /// increment committed (a host that ignores the ratio); the responses and the instance's
 /// count of kept increments it was asked to redo.
@@ -40,7 +53,7 @@ fn follow(text: &str) -> (Vec<Response>, u64) {
 #[test]
 fn the_estimate_changes_no_answer_and_kept_redos_are_counted() {
     let (plain, none_ignored) = follow(&implex_text(""));
-    let (controlled, ignored) = follow(&implex_text("step_tolerance = 0.01\n"));
+    let (controlled, ignored) = follow(&implex_text(&control(0.01)));
     for (a, b) in plain.iter().zip(&controlled) {
         assert_eq!(a.stress, b.stress);
         assert_eq!(a.tangent, b.tangent);
@@ -65,7 +78,7 @@ fn the_estimate_changes_no_answer_and_kept_redos_are_counted() {
     assert_eq!(implicit_ignored, 0);
 }
 
-/// The scene's tolerance must be a relative error and needs IMPL-EX.
+/// The scene's tolerance must be a relative error and needs IMPL-EX and a floor.
 #[test]
 fn a_bad_tolerance_is_refused() {
     for (text, what) in [
@@ -91,6 +104,10 @@ fn a_bad_tolerance_is_refused() {
             implex_text("smallest_step = 1e-6\n"),
             "needs solver.step_tolerance",
         ),
+        (
+            implex_text("step_tolerance = 0.01\n"),
+            "1/16 of the host's time increment",
+        ),
     ] {
         let e = Scene::from_toml_str(&text, common::repo("scenes"))
             .err()
@@ -106,14 +123,14 @@ fn a_bad_tolerance_is_refused() {
 /// `solver.smallest_step` is the control's floor: `rve run` following the ratio on §5.2.1
 /// never steps below it except to land on a path point, keeps every step at the floor
 /// whatever its estimate (ratio 1), and so takes fewer steps through the snap-back than
-/// without it (where it goes down to 1/1024 of the path's increment).
+/// with a floor below `rve run`'s own (which goes down to 1/1024 of the path's increment).
 #[test]
 fn the_smallest_step_is_the_controls_floor() {
     let dir = std::env::temp_dir().join(format!("mesorve-step-floor-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let increment = 2.2e-4 / 20.0;
+    let increment = INCREMENT;
     let floor = increment / 16.0;
-    let without = rve_run(&dir, "without", &implex_text("step_tolerance = 0.01\n"));
+    let without = rve_run(&dir, "without", &implex_text(&control(0.01)));
     let with = rve_run(
         &dir,
         "with",
@@ -206,11 +223,11 @@ fn a_tighter_tolerance_gives_a_smaller_error_through_the_snap_back() {
     let reference = dissipated(&rve_run(&dir, "implicit", &fine));
     let mut last = f64::INFINITY;
     for (name, extra) in [
-        ("none", ""),
-        ("loose", "step_tolerance = 0.03\n"),
-        ("tight", "step_tolerance = 0.01\n"),
+        ("none", String::new()),
+        ("loose", control(0.03)),
+        ("tight", control(0.01)),
     ] {
-        let rows = rve_run(&dir, name, &implex_text(extra));
+        let rows = rve_run(&dir, name, &implex_text(&extra));
         let error = (dissipated(&rows) - reference).abs() / reference;
         eprintln!(
             "{name}: {} increments, dissipated energy {:+.2} %",
@@ -223,7 +240,7 @@ fn a_tighter_tolerance_gives_a_smaller_error_through_the_snap_back() {
         for (e, _, [estimate, ratio]) in &rows {
             let step = e[0] - previous;
             previous = e[0];
-            let smallest = step <= 2.2e-4 / 20.0 / 1024.0 * (1.0 + 1e-6);
+            let smallest = step <= INCREMENT / 1024.0 * (1.0 + 1e-6);
             let kept = *estimate <= 1.0 || *ratio == 1.0 || smallest;
             assert!(kept, "{name}: kept above the tolerance at {e:?}");
         }
@@ -283,7 +300,7 @@ fn umat_pnewdts(extra: &str) -> Vec<f64> {
 /// here), and at `DTIME` itself there is none.
 #[test]
 fn the_ratio_reaches_the_umat_below_one_only() {
-    let pnewdts = umat_pnewdts("step_tolerance = 0.01\n");
+    let pnewdts = umat_pnewdts("step_tolerance = 0.01\nsmallest_step = 1e-6\n");
     for (kinc, pnewdt) in pnewdts.iter().enumerate() {
         assert!(
             *pnewdt == -1.0 || (*pnewdt > 0.0 && *pnewdt < 1.0),

@@ -180,7 +180,9 @@ impl Hypothesis {
                     "{name} = {e:e} (strain component {} of NTENS = {}): the 2D RVE holds \
                      the out-of-plane strains at zero (plane strain), and accepts at most \
                      {OUT_OF_PLANE_TOLERANCE:e} of round-off; axisymmetric and general 3D \
-                     states are not supported",
+                     states are not supported. In CalculiX use plane-strain elements (CPE4, \
+                     CPE8) with a plane_strain scene: a plane-stress element (CPS4) reaches \
+                     the UMAT as a 3D state with a free eps_33, which the RVE cannot take",
                     k + 1,
                     self.ntens()
                 )));
@@ -304,6 +306,7 @@ mod tests {
         );
         let e = h.rve_strain(&[1.0, 2.0, 1e-6, 3.0]).unwrap_err();
         assert!(e.to_string().contains("eps_33 = 1e-6"), "{e}");
+        assert!(e.to_string().contains("plane-strain elements (CPE4"), "{e}");
         let t = Hypothesis::Tridimensional;
         assert_eq!(
             t.rve_strain(&[1.0, 2.0, 0.0, 3.0, 0.0, 0.0]).unwrap(),

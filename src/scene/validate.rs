@@ -291,6 +291,15 @@ fn validate_mesh(m: &MeshSpec, w: f64, h: f64) -> Result<()> {
 /// in direction as well as size, and a first-order correction is no answer.
 const MAX_SHARE_TOLERANCE: f64 = 0.1;
 
+/// Why `solver.step_tolerance` needs `solver.smallest_step`, and how to choose it.
+const MISSING_FLOOR: &str = "missing: solver.step_tolerance needs the step control's floor, \
+     in the host's time units (the DTIME or dt it passes). Past the first crack the error \
+     estimate stays above the tolerance at any step, and a host without a floor halves its \
+     increment down to its own minimum and stops there (CalculiX: \"increment size smaller \
+     than minimum\"). Set smallest_step to 1/16 of the host's time increment: 0.003125 for \
+     CalculiX's *STATIC 0.05, 1. (and a minimum increment below it on that line); for rve \
+     run, 1/16 of the strain norm of a path increment (see docs/step_control.md)";
+
 fn validate_solver(s: &SolverSpec) -> Result<()> {
     positive("solver.tolerance", s.tolerance)?;
     if s.tolerance >= 1.0 {
@@ -325,6 +334,9 @@ fn validate_solver(s: &SolverSpec) -> Result<()> {
                 "applies to integration = \"implex\" only: the implicit scheme's step is \
                  controlled by solver.step_check (see docs/step_control.md)",
             ));
+        }
+        if s.smallest_step.is_none() {
+            return Err(Error::scene("solver.smallest_step", MISSING_FLOOR));
         }
     }
     if let Some(t) = s.smallest_step {

@@ -58,12 +58,25 @@ class StrainPath:
         self.note = note
         self.n = sum(n for _, n in segments)
 
+    def no_floor(self):
+        """A `solver.smallest_step` (the scene needs one with a tolerance) 16 times below
+        `rve run`'s own smallest step, 1/1024 of the path's shortest increment: the control
+        cuts down to rve run's own minimum as it would without a floor."""
+        prev, shortest = [0.0, 0.0, 0.0], float("inf")
+        for to, n in self.segments:
+            norm = sum((float(a) - b) ** 2 for a, b in zip(to, prev)) ** 0.5 / n
+            if norm > 0.0:
+                shortest = min(shortest, norm)
+            prev = [float(v) for v in to]
+        return float("%.6g" % (shortest / 1024 / 16))
+
     def edits(self, m, integration, step_tolerance=None):
         """The edits (`rve run --set`) of a run of the integration with every segment cut m
         times finer."""
         edits = {"solver.integration": integration}
         if step_tolerance is not None:
             edits["solver.step_tolerance"] = float("%g" % step_tolerance)
+            edits["solver.smallest_step"] = self.no_floor()
         edits["path"] = [{"to": [float(v) for v in to], "increments": n * m}
                          for to, n in self.segments]
         return edits
