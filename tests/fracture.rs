@@ -207,7 +207,7 @@ fn the_tangent_with_paste_cracks_matches_finite_differences() {
     );
 }
 
-/// Follows uniaxial stress in x (IMPL-EX) through `strains` from `inst`'s state: the
+/// Follows uniaxial stress in x (the model's integration) through `strains` from `inst`'s state: the
 /// stresses in x.
 fn follow_uniaxial(inst: &mut Instance, ws: &mut rve::Workspace, strains: &[f64]) -> Vec<f64> {
     strains
@@ -258,6 +258,30 @@ fn closed_cracks_give_back_the_compressive_stiffness() {
         closed >= 0.8 * virgin,
         "compressive stiffness {closed} against {virgin}"
     );
+}
+
+/// Uniaxial compression with friction 0.6 (implicit) through -6.5e-4, where Newton cycles
+/// at paste points on the peak of their shear traction and the secant iterations must
+/// carry the frictional shear's normal coupling to converge (docs/fracture.md): the
+/// stress keeps rising past the friction-free peak.
+#[test]
+fn compression_with_friction_rises_past_the_friction_free_peak() {
+    let model = model_with(&[
+        ("integration = \"implex\"", "integration = \"implicit\""),
+        (
+            "paste_cracking = true",
+            "paste_cracking = true\nfriction = true",
+        ),
+        ("[effects]", "friction = { coefficient = 0.6 }\n\n[effects]"),
+    ]);
+    let mut inst = Instance::new(model.clone());
+    let mut ws = model.workspace();
+    let strains: Vec<f64> = (1..=14).map(|k| -5e-5 * k as f64).collect();
+    let stress = follow_uniaxial(&mut inst, &mut ws, &strains);
+    println!("sigma_xx {:.2} MPa at {:e}", stress[13], strains[13]);
+    assert!(stress.windows(2).all(|w| w[1] < w[0]), "{stress:?}");
+    // Four times the cell's tensile strength (3.40 MPa).
+    assert!(stress[13] < -4.0 * 3.40, "{stress:?}");
 }
 
 /// A checkpoint of a cracked cell in the softening continues bit for bit: the state bytes

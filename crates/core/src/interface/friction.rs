@@ -202,21 +202,13 @@ impl InterfaceLaw for Frictional {
         let f = coulomb.respond(slip, jump[0], point.traction.y, point.matrix[(1, 1)]);
         trial[n] = f.slip;
         point.traction.x += f.traction;
-        match kind {
-            TangentKind::Consistent => {
-                point.matrix[(0, 0)] += f.d_shear;
-                point.matrix[(0, 1)] += f.d_normal;
-            }
-            // The secant of the frictional spring from its committed slip, `t_f / (delta_s
-            // - s)`: the stick stiffness, less once it slides.
-            TangentKind::Secant => {
-                point.matrix[(0, 0)] += if f.sliding {
-                    f.traction / (jump[0] - slip)
-                } else {
-                    stiffness
-                }
-            }
-        }
+        // The frictional part's consistent tangent with either kind of matrix. The secant
+        // iterations replace the tangent of the softening laws, whose kinks make Newton
+        // cycle; Coulomb's law does not soften, and its secant `t_f / (delta_s - s)` would
+        // leave out how the limit `mu |t_n|` follows the normal jump, so that the
+        // iterations contract only as far as the sliding points' normal jumps settle.
+        point.matrix[(0, 0)] += f.d_shear;
+        point.matrix[(0, 1)] += f.d_normal;
         if f.sliding && f.d_normal != 0.0 {
             point.branch = Branch::Sliding;
         }

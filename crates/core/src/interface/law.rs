@@ -16,8 +16,9 @@ pub enum TangentKind {
     #[default]
     Consistent,
     /// A positive definite matrix for the secant iterations of the solver: `S` with
-    /// `t = S delta` for a law without friction; a law with friction puts its stick
-    /// stiffness for the frictional shear (the residual always takes the traction).
+    /// `t = S delta` for a law without friction; a law with friction adds the consistent
+    /// tangent of its frictional shear (not symmetric where a point slides; the residual
+    /// always takes the traction).
     Secant,
 }
 
