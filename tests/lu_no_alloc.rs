@@ -19,9 +19,9 @@ use counting_alloc::count_allocations;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, LuSymbolicParams, NumericLu};
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::SparseColMatRef;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par};
-use mesorve_core::solver::{FactorKind, FactorMethod, LinearSolver};
+use mesorve_core::solver::{FactorKind, FactorMethod, LinearSolver, NumericFactor};
 use rve::{Instance, Model, TangentRequest};
 
 /// The model of `scene` and its tangent at `eps_xx = 1e-4`, made non-symmetric: the entry
@@ -57,6 +57,29 @@ fn relative_residual(a: SparseColMatRef<'_, usize, f64>, x: &[f64], b: &[f64]) -
     norm(&r) / norm(b)
 }
 
+/// One `FactorMethod::Lu` factorization of `values` on `pattern` and one solve of `x` in
+/// place: the kind of factorization.
+fn lu_and_solve(
+    solver: &LinearSolver,
+    pattern: &SymbolicSparseColMat<usize>,
+    values: &[f64],
+    numeric: &mut NumericFactor,
+    stack: &mut MemBuffer,
+    x: &mut [f64],
+) -> FactorKind {
+    let kind = solver
+        .factorize(
+            pattern,
+            values,
+            numeric,
+            FactorMethod::Lu,
+            MemStack::new(stack),
+        )
+        .unwrap();
+    solver.solve_in_place(numeric, x, 1, MemStack::new(stack));
+    kind
+}
+
 #[test]
 fn non_symmetric_factorization_and_solve_do_not_allocate() {
     let (model, values) = non_symmetric_tangent("scenes/paper_rve.toml");
@@ -70,18 +93,7 @@ fn non_symmetric_factorization_and_solve_do_not_allocate() {
     let mut x = b.clone();
     let mut run = |x: &mut [f64]| {
         x.copy_from_slice(&b);
-        let factor_stack = MemStack::new(&mut stack);
-        let kind = solver
-            .factorize(
-                pattern,
-                &values,
-                &mut numeric,
-                FactorMethod::Lu,
-                factor_stack,
-            )
-            .unwrap();
-        solver.solve_in_place(&mut numeric, x, 1, MemStack::new(&mut stack));
-        kind
+        lu_and_solve(solver, pattern, &values, &mut numeric, &mut stack, x)
     };
     assert_eq!(run(&mut x), FactorKind::Lu);
     let mut kind = None;
@@ -99,28 +111,19 @@ fn non_symmetric_factorization_and_solve_do_not_allocate() {
 /// Prints, per scene, the allocations of one factorization and solve after a warm-up with
 /// `LinearSolver` (`FactorMethod::Lu`) and with faer's supernodal and simplicial LU.
 #[test]
-#[ignore]
+#[ignore = "a measurement for docs/solver.md, not a check: prints the allocation counts \
+            (cargo test --release --test lu_no_alloc -- --ignored --nocapture)"]
 fn faer_lu_allocations() {
     for scene in ["scenes/paper_rve.toml", "scenes/paper_rve_fine.toml"] {
         let (model, values) = non_symmetric_tangent(scene);
         let pattern = &model.discretization().pattern.symbolic;
         let n = pattern.nrows();
-        let solver = model.linear_solver();
+        let solver = &LinearSolver::for_non_symmetric(pattern, true).unwrap();
         let mut numeric = solver.numeric();
         let mut stack = MemBuffer::new(solver.scratch(1));
         let mut rhs = vec![1.0; n];
         let mut run = || {
-            let factor_stack = MemStack::new(&mut stack);
-            solver
-                .factorize(
-                    pattern,
-                    &values,
-                    &mut numeric,
-                    FactorMethod::Lu,
-                    factor_stack,
-                )
-                .unwrap();
-            solver.solve_in_place(&mut numeric, &mut rhs, 1, MemStack::new(&mut stack));
+            lu_and_solve(solver, pattern, &values, &mut numeric, &mut stack, &mut rhs);
         };
         run();
         let allocations = count_allocations(&mut run);

@@ -39,7 +39,7 @@
 //! polishing step), so the two agree to round-off.
 
 use super::problem::{Problem, Strain};
-use super::workspace::{FactorUse, Workspace};
+use super::workspace::Workspace;
 use crate::error::{Error, Result};
 use crate::state::{LinearBranch, State, JUMP_OPERATOR_LEN};
 
@@ -189,18 +189,11 @@ pub fn materialize(
         crate::interface::TangentKind::Consistent,
         &mut ws.current,
     );
-    problem
-        .factorize(ws, FactorUse::OneUse)
-        .map_err(|e| Error::Solve {
-            reason: format!("singular RVE tangent on the linear branch set ({e})"),
-            depth: 0,
-            suggested_step_ratio: 0.5,
-        })?;
-    ws.dx
-        .iter_mut()
-        .zip(&ws.current.r)
-        .for_each(|(d, r)| *d = -r);
-    ws.factorization.solve(problem.linear, &mut ws.dx, 1);
+    problem.one_use_correction(ws).map_err(|e| Error::Solve {
+        reason: format!("singular RVE tangent on the linear branch set ({e})"),
+        depth: 0,
+        suggested_step_ratio: 0.5,
+    })?;
     out.unknowns
         .iter_mut()
         .zip(&ws.dx)

@@ -432,11 +432,7 @@ fn correction(
             &mut ws.dx,
         );
     } else {
-        ws.dx
-            .iter_mut()
-            .zip(&ws.current.r)
-            .for_each(|(d, r)| *d = -r);
-        ws.factorization.solve(problem.linear, &mut ws.dx, 1);
+        problem.solve_correction(ws);
     }
     if ws.dx.iter().any(|d| !d.is_finite()) {
         return Err(Failure::Singular("non-finite Newton correction".into()));
@@ -514,18 +510,11 @@ pub fn equilibrium_unknowns(
         if rnorm <= tolerance {
             return Ok(());
         }
-        problem
-            .factorize(ws, FactorUse::OneUse)
-            .map_err(|e| Error::Solve {
-                reason: format!("singular RVE matrix rebuilding a state ({e:?})"),
-                depth: 0,
-                suggested_step_ratio: 0.5,
-            })?;
-        ws.dx
-            .iter_mut()
-            .zip(&ws.current.r)
-            .for_each(|(d, r)| *d = -r);
-        ws.factorization.solve(problem.linear, &mut ws.dx, 1);
+        problem.one_use_correction(ws).map_err(|e| Error::Solve {
+            reason: format!("singular RVE matrix rebuilding a state ({e:?})"),
+            depth: 0,
+            suggested_step_ratio: 0.5,
+        })?;
         rnorm = line_search(problem, strain, unknowns, rnorm, true, ws);
         unknowns.copy_from_slice(&ws.x_try);
         accept_candidate(ws);

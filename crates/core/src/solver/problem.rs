@@ -120,6 +120,23 @@ impl Problem<'_> {
         )
     }
 
+    /// The Newton correction `dx = -K^-1 R` of the current evaluation into `ws.dx`, with a
+    /// fresh factorization that serves it alone.
+    pub(super) fn one_use_correction(&self, ws: &mut Workspace) -> Result<(), LinearAlgebraError> {
+        self.factorize(ws, FactorUse::OneUse)?;
+        self.solve_correction(ws);
+        Ok(())
+    }
+
+    /// `dx = -K_f^-1 R` of the current evaluation into `ws.dx`, with the kept factors.
+    pub(super) fn solve_correction(&self, ws: &mut Workspace) {
+        ws.dx
+            .iter_mut()
+            .zip(&ws.current.r)
+            .for_each(|(d, r)| *d = -r);
+        ws.factorization.solve(self.linear, &mut ws.dx, 1);
+    }
+
     /// `out = G d` for a strain `d`: the load a strain step puts on the RVE.
     pub(super) fn load(&self, d: &Strain, out: &mut [f64]) {
         sensitivity_times(&self.disc.g, d, out);
