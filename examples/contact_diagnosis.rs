@@ -71,6 +71,7 @@ fn cohesive_law(scene: &Scene) -> CohesiveLaw {
         },
         contact: spec.effects.contact,
         contact_shear: itz.contact_shear,
+        softening: 1.0,
     }
 }
 

@@ -230,6 +230,7 @@ max_iterations = {it}
                 penalty: Penalty::PerLength { lambda_p: LAMBDA_P },
                 contact: true,
                 contact_shear: ContactShear::Penalty,
+                softening: 1.0,
             },
             jump: [0.0; 2],
             history: CohesiveHistory::default(),

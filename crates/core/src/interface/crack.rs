@@ -327,6 +327,15 @@ impl InterfaceLaw for CrackLaw {
     fn damaged_shear_stiffness(&self, history: &[f64], _length: f64) -> Option<f64> {
         Some(self.beta * self.beta * (self.stiffness - self.secant(history[0])))
     }
+
+    /// The fracture energy `scale` times larger: Hordijk's softening is stretched alike
+    /// (`w_c = 5.136 G_f / f_t`), the strength and initial stiffness stay.
+    fn regularized(&self, scale: f64) -> Option<Arc<dyn InterfaceLaw>> {
+        Some(Arc::new(CrackLaw {
+            fracture_energy: self.fracture_energy * scale,
+            ..*self
+        }))
+    }
 }
 
 /// The scene's table of a crack law (`[materials.paste_crack]`): the paste's tensile
@@ -451,6 +460,35 @@ mod tests {
         assert!((area / l.fracture_energy - 1.0).abs() < 1e-3, "{area}");
         assert_eq!(l.envelope(d0).0, l.strength);
         assert_eq!(l.envelope(d0 + wc).0, 0.0);
+    }
+
+    /// Regularized by `scale`, the softening dissipates `scale G_f` and ends at
+    /// `scale w_c` past `delta_0`; the law before the strength is unchanged.
+    #[test]
+    fn regularization_stretches_the_softening_alone() {
+        let l = law();
+        let r = l.regularized(2.5).expect("the law softens");
+        let (d0, wc) = (l.peak_opening(), l.critical_opening());
+        let mut trial = [0.0];
+        let at = |jump: [f64; 2], trial: &mut [f64]| {
+            r.respond(&[0.0], trial, jump, 1.0, TangentKind::Consistent)
+                .traction
+        };
+        assert_eq!(
+            at([0.2 * d0, 0.9 * d0], &mut trial),
+            l.evaluate_as(0.0, [0.2 * d0, 0.9 * d0], false).0
+        );
+        let x = 0.3;
+        let stretched = at([0.0, d0 + 2.5 * x * wc], &mut trial).y;
+        let original = l.envelope(d0 + x * wc).0;
+        assert!(
+            (stretched - original).abs() <= 1e-12 * l.strength,
+            "{stretched} {original}"
+        );
+        // Past the stretched end only the residual secant is left.
+        let end = d0 + 2.5 * wc;
+        assert!(at([0.0, end], &mut trial).y <= RESIDUAL * l.stiffness * end * (1.0 + 1e-12));
+        assert!(at([0.0, 0.99 * end], &mut trial).y > RESIDUAL * l.stiffness * end);
     }
 
     fn fd(l: &CrackLaw, h: f64, jump: [f64; 2], closed: bool) -> Matrix2<f64> {

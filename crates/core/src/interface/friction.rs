@@ -275,6 +275,15 @@ impl InterfaceLaw for Frictional {
         history.get(self.inner.history_len()).copied()
     }
 
+    /// The inner law regularized, with the same friction: slip is not softening.
+    fn regularized(&self, scale: f64) -> Option<Arc<dyn InterfaceLaw>> {
+        let inner = self.inner.regularized(scale)?;
+        Some(Arc::new(Frictional {
+            inner,
+            coefficient: self.coefficient,
+        }))
+    }
+
     fn failure_hint(&self, closed_points: usize) -> Option<String> {
         self.inner.failure_hint(closed_points)
     }

@@ -7,6 +7,8 @@
 //! read a law's parameters. A new law is one file in this folder implementing the trait,
 //! plus its registration where the model translates the scene (`model::from_scene`).
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix2, Vector2};
 
 /// Which matrix a law returns with its traction.
@@ -210,6 +212,16 @@ pub trait InterfaceLaw: std::fmt::Debug + Send + Sync {
 
     /// The frictional slip of a point with `history`, for a law with friction.
     fn slip(&self, _history: &[f64]) -> Option<f64> {
+        None
+    }
+
+    /// This law with its softening stretched `scale` times, its strength and the
+    /// stiffness before the peak unchanged: the crack band's regularization by a host
+    /// element's size (`scale = L_cell / h`), so that a cell that fails dissipates its
+    /// fracture energy per unit crack length over the element's length `h` instead of its
+    /// own `L_cell` (Bažant & Oh 1983). `None`: the law has no softening to scale (the
+    /// default), and stays as it is.
+    fn regularized(&self, _scale: f64) -> Option<Arc<dyn InterfaceLaw>> {
         None
     }
 
