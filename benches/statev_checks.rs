@@ -98,6 +98,7 @@ fn call(umat: &Umat, k: usize, start: [f64; 3], target: [f64; 3], statev: &mut [
         npt: 1,
         kstep: 1,
         kinc: k as i32 + 1,
+        celent: None,
     };
     let mut out = UmatOutputs {
         stress: &mut stress,

@@ -38,7 +38,7 @@ fn jumps(model: &Model, x: &[f64]) -> Vec<[f64; 2]> {
     let q = disc.quadrature;
     let np = q.num_points();
     let mut out = Vec::new();
-    for (g, dofs) in disc.interfaces.iter().zip(&disc.interface_dofs) {
+    for (g, dofs) in disc.interfaces.iter().zip(disc.interface_dofs.iter()) {
         let u = nalgebra::SVector::<f64, 8>::from_fn(|i, _| {
             let d = dofs[i];
             if (d as usize) < x.len() {
@@ -71,7 +71,6 @@ fn cohesive_law(scene: &Scene) -> CohesiveLaw {
         },
         contact: spec.effects.contact,
         contact_shear: itz.contact_shear,
-        softening: 1.0,
     }
 }
 

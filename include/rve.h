@@ -508,8 +508,9 @@ const char *rve_status_message(uint32_t code);
 //   and a failure or a `PNEWDT` < 1 it would have got fills `STRESS(1:NTENS)` with NaN.
 //
 // `SSE`, `SPD`, `SCD`, `RPL`, `DDSDDT`, `DRPLDE`, `DRPLDT` are not written; `TEMP`,
-// `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `CELENT`, `DFGRD0`, `DFGRD1`, `LAYER`,
-// `KSPT` are not read. Only the low 32 bits of `cmname_len` are used (gfortran passes
+// `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `DFGRD0`, `DFGRD1`, `LAYER`, `KSPT` are
+// not read; `CELENT` (NULL: none) only by a scene with `effects.regularization` whose
+// `PROPS(7)` is 0. Only the low 32 bits of `cmname_len` are used (gfortran passes
 // a `size_t`, CalculiX's C caller an `int`), and at most 80 characters. Distinct points
 // may be called from several threads at once.
 //

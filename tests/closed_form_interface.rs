@@ -230,7 +230,6 @@ max_iterations = {it}
                 penalty: Penalty::PerLength { lambda_p: LAMBDA_P },
                 contact: true,
                 contact_shear: ContactShear::Penalty,
-                softening: 1.0,
             },
             jump: [0.0; 2],
             history: CohesiveHistory::default(),
@@ -498,7 +497,7 @@ fn compare(setup: &Setup, strains: &[[f64; 3]], name: &str) -> Errors {
         let current = model.current_state(instance.committed()).unwrap();
         let x = &current.unknowns;
         let val = |d: u32| if d == FIXED { 0.0 } else { x[d as usize] };
-        for dofs in &model.discretization().interface_dofs {
+        for dofs in model.discretization().interface_dofs.iter() {
             for node in 0..2 {
                 let dx = val(dofs[4 + 2 * node]) - val(dofs[2 * node]);
                 let dy = val(dofs[5 + 2 * node]) - val(dofs[1 + 2 * node]);

@@ -112,6 +112,7 @@ fn call(
         npt: a.npt,
         kstep: a.kstep,
         kinc: a.kinc,
+        celent: None,
     };
     let result = umat.call(
         &c,

@@ -21,7 +21,6 @@ fn law() -> CohesiveLaw {
         penalty: Penalty::PerLength { lambda_p: 1e5 },
         contact: true,
         contact_shear: ContactShear::Penalty,
-        softening: 1.0,
     }
 }
 

@@ -278,6 +278,7 @@ fn umat_pnewdts(extra: &str) -> Vec<f64> {
                 npt: 1,
                 kstep: 1,
                 kinc,
+                celent: None,
             };
             let outputs = &mut UmatOutputs {
                 stress: &mut stress,

@@ -86,8 +86,9 @@ impl From<HostError> for Failure {
 ///   and a failure or a `PNEWDT` < 1 it would have got fills `STRESS(1:NTENS)` with NaN.
 ///
 /// `SSE`, `SPD`, `SCD`, `RPL`, `DDSDDT`, `DRPLDE`, `DRPLDT` are not written; `TEMP`,
-/// `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `CELENT`, `DFGRD0`, `DFGRD1`, `LAYER`,
-/// `KSPT` are not read. Only the low 32 bits of `cmname_len` are used (gfortran passes
+/// `DTEMP`, `PREDEF`, `DPRED`, `COORDS`, `DROT`, `DFGRD0`, `DFGRD1`, `LAYER`, `KSPT` are
+/// not read; `CELENT` (NULL: none) only by a scene with `effects.regularization` whose
+/// `PROPS(7)` is 0. Only the low 32 bits of `cmname_len` are used (gfortran passes
 /// a `size_t`, CalculiX's C caller an `int`), and at most 80 characters. Distinct points
 /// may be called from several threads at once.
 ///
@@ -145,7 +146,7 @@ pub unsafe extern "C" fn rve_umat(
     let _unused = (
         sse, spd, scd, rpl, ddsddt, drplde, drpldt, temp, dtemp, predef, dpred,
     );
-    let _unused = (coords, drot, celent, dfgrd0, dfgrd1, layer, kspt);
+    let _unused = (coords, drot, dfgrd0, dfgrd1, layer, kspt);
     let int = |p: *const c_int| p.as_ref().copied();
     let scalars = HostScalars {
         ndi: int(ndi),
@@ -158,6 +159,7 @@ pub unsafe extern "C" fn rve_umat(
         kstep: int(kstep),
         kinc: int(kinc),
         dtime: dtime.as_ref().copied(),
+        celent: celent.as_ref().copied(),
         // The low 32 bits: gfortran passes a `size_t`, CalculiX's C caller an `int`.
         cmname_len: cmname_len as u32 as usize,
     };

@@ -40,6 +40,10 @@ pub enum Note {
     VtkWrite,
     /// `MESORVE_UMAT_VTK`: an IMPL-EX answer without a fluctuation got no file.
     VtkSkipped,
+    /// A scene with `effects.regularization` called without an element length.
+    NoElementLength,
+    /// A scene with `effects.regularization` regularized by the host's `CELENT`.
+    Celent,
 }
 
 /// The [`Note`]s said so far, one bit each.

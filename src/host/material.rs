@@ -35,14 +35,17 @@
 //! | 4 | `materials.matrix.young` |
 //! | 5 | `materials.aggregate.young` |
 //! | 6 | the tangent returned in `DDSDDE`: 0 the consistent one, 1 the elastic tangent of the virgin RVE |
+//! | 7 | the element's characteristic length (scene length unit) for a scene with `effects.regularization`; 0: `CELENT` where the host passes it |
 //!
-//! A non-zero `PROPS(k)` for `k > 6` is refused. Overridden scenes are built from the
+//! A non-zero `PROPS(k)` for `k > 7` is refused. `PROPS(7)` is not a scene key: the
+//! elements of every length share the scene's model ([`Material::for_element`]). Overridden scenes are built from the
 //! edited scene text (relative paths still resolve against the scene file's directory);
 //! the same scene with the same overrides is meshed once per process.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use super::diagnostics::{note_once, Note};
 use super::hypothesis::PlaneResponse;
 use crate::error::{Error, Result};
 use crate::model::{cache, Model};
@@ -110,6 +113,9 @@ pub const PROPS_KEYS: [&str; 5] = [
 
 /// Position (1-based) of the tangent choice in `PROPS`.
 pub const PROPS_TANGENT: usize = 6;
+
+/// Position (1-based) of the element's characteristic length in `PROPS`.
+pub const PROPS_LENGTH: usize = 7;
 
 /// Directories searched for scene files, in order.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -249,6 +255,52 @@ impl Material {
     }
 }
 
+impl Material {
+    /// This material at an element of the host: regularized for the element's length
+    /// (`PROPS(7)`, else `CELENT`) when the scene has `effects.regularization`; itself
+    /// otherwise (a `CELENT` is then not read; a `PROPS(7)` is refused by
+    /// [`Model::regularized`]). The regularized model shares the scene's mesh,
+    /// operators and workspaces: a graded mesh costs a small model per distinct length.
+    pub fn for_element(self: &Arc<Self>, props: &[f64], celent: Option<f64>) -> Result<Arc<Self>> {
+        let regularizes = self.model.scene().spec.effects.regularization;
+        let (length, from) = match props.get(PROPS_LENGTH - 1).copied().unwrap_or(0.0) {
+            0.0 => match celent.filter(|_| regularizes) {
+                Some(h) => (h, "CELENT"),
+                None => {
+                    if regularizes {
+                        note_once(Note::NoElementLength, || {
+                            format!(
+                                "mesorve: {}: effects.regularization is on and the host gives \
+                                 no element length (PROPS(7) = 0, no CELENT): the cell is not \
+                                 regularized, and a member's dissipation follows its mesh",
+                                self.source
+                            )
+                        });
+                    }
+                    return Ok(self.clone());
+                }
+            },
+            h => (h, "PROPS(7)"),
+        };
+        let model = self.model.regularized(length)?;
+        if from == "CELENT" {
+            note_once(Note::Celent, || {
+                format!(
+                    "mesorve: {}: regularized by the host's CELENT ({length} at the first \
+                     element); set PROPS(7) where the host does not set CELENT (CalculiX)",
+                    self.source
+                )
+            });
+        }
+        Ok(Arc::new(Material {
+            model: Arc::new(model),
+            tangent: self.tangent,
+            elastic: self.elastic,
+            source: format!("{}, element length {length} ({from})", self.source),
+        }))
+    }
+}
+
 /// `(k, key, value)` for every non-zero `PROPS(k)`, `k` in `1..=5`.
 fn overrides(props: &[f64]) -> Result<Vec<(usize, &'static str, f64)>> {
     let mut out = Vec::new();
@@ -264,9 +316,16 @@ fn overrides(props: &[f64]) -> Result<Vec<(usize, &'static str, f64)>> {
         match PROPS_KEYS.get(i) {
             Some(&key) => out.push((k, key, v)),
             None if k == PROPS_TANGENT => {}
+            None if k == PROPS_LENGTH && v > 0.0 => {}
+            None if k == PROPS_LENGTH => {
+                return Err(prop(format!(
+                    "{v}: the element's length is a positive number (0: CELENT or none)"
+                )))
+            }
             None => {
                 return Err(prop(format!(
-                    "{v}: only PROPS(1..={PROPS_TANGENT}) have a meaning ({}, tangent)",
+                    "{v}: only PROPS(1..={PROPS_LENGTH}) have a meaning ({}, tangent, \
+                     element length)",
                     PROPS_KEYS.join(", ")
                 )))
             }
@@ -386,8 +445,13 @@ mod tests {
             o,
             vec![(1, "materials.itz.sigma_c", 3.0), (3, "geometry.seed", 5.0)]
         );
-        let e = overrides(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0]).unwrap_err();
+        assert!(overrides(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0])
+            .unwrap()
+            .is_empty());
+        let e = overrides(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -2.0]).unwrap_err();
         assert!(e.to_string().contains("PROPS(7)"), "{e}");
+        let e = overrides(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0, 1.0]).unwrap_err();
+        assert!(e.to_string().contains("PROPS(8)"), "{e}");
         let e = overrides(&[f64::NAN]).unwrap_err();
         assert!(e.to_string().contains("PROPS(1)"), "{e}");
         assert_eq!(tangent_choice(&[]).unwrap(), TangentRequest::Consistent);

@@ -83,7 +83,7 @@ impl RveFields {
             .collect();
         let macro_eps = Vector3::from(eps);
         let (mut strain, mut stress) = (Vec::new(), Vec::new());
-        for e in &disc.bulk {
+        for e in disc.bulk.iter() {
             let u = SVector::<f64, 6>::from_fn(|i, _| fluct(e.dofs[i]));
             let s = macro_eps + e.b * u;
             let t = e.d * s;
@@ -113,7 +113,7 @@ impl RveFields {
         let per_element = disc.quadrature.rule().len() * laws.history_len();
         disc.interfaces
             .iter()
-            .zip(&disc.interface_dofs)
+            .zip(disc.interface_dofs.iter())
             .enumerate()
             .map(|(e, (geometry, dofs))| {
                 let u = SVector::<f64, 8>::from_fn(|i, _| fluct(dofs[i]));

@@ -67,6 +67,16 @@ pub fn scene_fingerprint(scene: &Scene) -> Result<u64> {
     Ok(fold(fnv1a64(canonical.as_bytes())))
 }
 
+/// The fingerprint of a model regularized for a host element of `element_length`: its
+/// states mean other openings than the scene's own (`Model::regularized`).
+pub fn regularized_fingerprint(scene_fingerprint: u64, element_length: f64) -> u64 {
+    let text = format!(
+        "{scene_fingerprint:016x} element_length {:016x}",
+        element_length.to_bits()
+    );
+    fold(fnv1a64(text.as_bytes()))
+}
+
 /// `h` folded to [`FINGERPRINT_BITS`] bits (never 0, which old states stand for).
 fn fold(h: u64) -> u64 {
     let mask = (1u64 << FINGERPRINT_BITS) - 1;

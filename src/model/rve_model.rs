@@ -3,8 +3,9 @@
 
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
-use super::fingerprint::scene_fingerprint;
+use super::fingerprint::{regularized_fingerprint, scene_fingerprint};
 use super::from_scene::{interface_law, paste_law, with_friction};
 use super::microstructure::build_microstructure;
 use crate::error::{Error, Result};
@@ -41,17 +42,17 @@ pub struct Response {
 pub struct Model {
     pub(super) id: u64,
     pub(crate) scene: Scene,
-    pub(crate) microstructure: Microstructure,
+    pub(crate) microstructure: Arc<Microstructure>,
     pub(crate) disc: Discretization,
-    pub(crate) hom: Homogenizer,
+    pub(crate) hom: Arc<Homogenizer>,
     /// Symbolic LL^T and LU analyses of the pattern.
-    pub(crate) linear: LinearSolver,
+    pub(crate) linear: Arc<LinearSolver>,
     pub(crate) solver: Settings,
     /// Homogenized tangent of the virgin RVE (row-major), and its `s_zz` row.
     pub(crate) elastic_tangent: [f64; 9],
     pub(crate) elastic_s_zz_tangent: [f64; 3],
     /// `-K_el^-1 G` of the virgin RVE (n x 3): the solver's predictor.
-    pub(crate) elastic_sensitivity: Vec<f64>,
+    pub(crate) elastic_sensitivity: Arc<[f64]>,
     /// What gives this model's states their meaning (`fingerprint`): states of another
     /// fingerprint are refused.
     pub(crate) fingerprint: u64,
@@ -59,6 +60,10 @@ pub struct Model {
     pub(crate) statev_len: usize,
     /// The unit of IMPL-EX step sharing's similarity (`share::secant_scale`).
     pub(crate) secant_scale: f64,
+    /// For a model regularized by a host element's size ([`Model::regularized`]): the
+    /// scene's own model, whose mesh, operators and per-thread workspaces it shares, and
+    /// the element's length.
+    pub(crate) regularizes: Option<(Arc<Model>, f64)>,
 }
 
 impl std::fmt::Debug for Model {
@@ -115,17 +120,18 @@ impl Model {
         let mut model = Model {
             id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
             scene: scene.clone(),
-            microstructure,
+            microstructure: Arc::new(microstructure),
             disc,
-            hom,
-            linear,
+            hom: Arc::new(hom),
+            linear: Arc::new(linear),
             solver: spec.solver,
             elastic_tangent: [0.0; 9],
             elastic_s_zz_tangent: [0.0; 3],
-            elastic_sensitivity: Vec::new(),
+            elastic_sensitivity: Arc::new([]),
             fingerprint: scene_fingerprint(scene)?,
             statev_len: 0,
             secant_scale: 0.0,
+            regularizes: None,
         };
         model.statev_len = statev::values_needed(
             model.state_sizes(),
@@ -155,7 +161,8 @@ impl Model {
         State::virgin(self.disc.n(), self.disc.history_len())
     }
 
-    /// A workspace for one thread.
+    /// A workspace for one thread (sized for the scene's own model, which a regularized
+    /// one shares).
     pub fn workspace(&self) -> Workspace {
         Workspace::new(
             &self.disc,
@@ -163,8 +170,74 @@ impl Model {
             self.solver
                 .max_iterations
                 .max(self.solver.max_secant_iterations) as usize,
-            self.id,
+            self.workspace_id(),
         )
+    }
+
+    /// The id of the model whose workspaces this one uses: its own, or that of the
+    /// scene's model it regularizes.
+    pub(crate) fn workspace_id(&self) -> u64 {
+        self.regularizes.as_ref().map_or(self.id, |(m, _)| m.id)
+    }
+
+    /// The scene's own model: this one, or the one it regularizes.
+    pub(crate) fn unregularized(self: &Arc<Self>) -> &Arc<Model> {
+        self.regularizes.as_ref().map_or(self, |(m, _)| m)
+    }
+
+    /// The host element's length this model is regularized for, if it is.
+    pub fn element_length(&self) -> Option<f64> {
+        self.regularizes.as_ref().map(|&(_, h)| h)
+    }
+
+    /// This scene's model regularized for a host element of characteristic length
+    /// `element_length` (the scene's length unit), the crack band of Bažant & Oh (1983)
+    /// applied to the cell: every interface law's softening is stretched by
+    /// `s = L_cell / h` (`L_cell = sqrt(V)`, the cell's side), so that the cell dissipates
+    /// `G_cell / h` per unit volume and a host element of size `h` crossed by one crack
+    /// dissipates the cell's fracture energy per unit crack length, whatever `h`. The
+    /// strength and the response before the peak are the scene's. Needs
+    /// `effects.regularization`. It shares the mesh, operators, factorization analyses and
+    /// workspaces of the scene's model; its laws are its own, and so is its fingerprint
+    /// (a state of one element length is refused at another).
+    pub fn regularized(self: &Arc<Self>, element_length: f64) -> Result<Model> {
+        let base = self.unregularized();
+        if !base.scene.spec.effects.regularization {
+            return Err(Error::scene(
+                "effects.regularization",
+                format!(
+                    "a host element length ({element_length}) was given and the scene does \
+                     not regularize: set `[effects] regularization = true`, or pass no length"
+                ),
+            ));
+        }
+        if !(element_length.is_finite() && element_length > 0.0) {
+            return Err(Error::scene(
+                "element length",
+                format!("{element_length}: the host element's length must be a positive number"),
+            ));
+        }
+        let scale = base.disc.volume.sqrt() / element_length;
+        let laws = base.disc.law.as_ref().map(|l| l.regularized(scale));
+        Ok(Model {
+            id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
+            scene: base.scene.clone(),
+            microstructure: base.microstructure.clone(),
+            disc: match laws {
+                Some(laws) => base.disc.with_laws(laws),
+                None => base.disc.clone(),
+            },
+            hom: base.hom.clone(),
+            linear: base.linear.clone(),
+            solver: base.solver,
+            elastic_tangent: base.elastic_tangent,
+            elastic_s_zz_tangent: base.elastic_s_zz_tangent,
+            elastic_sensitivity: base.elastic_sensitivity.clone(),
+            fingerprint: regularized_fingerprint(base.fingerprint, element_length),
+            statev_len: base.statev_len,
+            secant_scale: base.secant_scale,
+            regularizes: Some((base.clone(), element_length)),
+        })
     }
 
     /// The mesh (for the writers of [`crate::io`]).
@@ -225,7 +298,7 @@ impl Model {
         trial: &mut State,
         request: TangentRequest,
     ) -> Result<Response> {
-        if ws.model_id() != self.id {
+        if ws.model_id() != self.workspace_id() {
             return Err(Error::WorkspaceMismatch);
         }
         check_strain(strain)?;
@@ -293,7 +366,7 @@ impl Model {
         trial: &mut State,
         reuse: bool,
     ) -> Result<Response> {
-        if ws.model_id() != self.id {
+        if ws.model_id() != self.workspace_id() {
             return Err(Error::WorkspaceMismatch);
         }
         check_strain(strain)?;

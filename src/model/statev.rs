@@ -114,7 +114,7 @@ impl Model {
         if self.solver.integration == Integration::Implex || core.strain == [0.0; 3] {
             return Ok(state);
         }
-        if ws.model_id() != self.id {
+        if ws.model_id() != self.workspace_id() {
             return Err(Error::WorkspaceMismatch);
         }
         let mut unknowns = std::mem::take(&mut state.unknowns);

@@ -16,7 +16,11 @@ thread_local! {
 
 /// Runs `f` with this thread's workspace for `model`. The workspace is taken out of the
 /// cache while `f` runs, so a panic inside `f` drops it instead of leaving it half-used.
+///
+/// Models regularized for other element lengths share the workspaces of their scene's
+/// model: a graded host mesh costs no workspace per length.
 pub(crate) fn with_workspace<R>(model: &Arc<Model>, f: impl FnOnce(&mut Workspace) -> R) -> R {
+    let model = model.unregularized();
     let taken = WORKSPACES.with(|w| {
         let mut w = w.borrow_mut();
         match w

@@ -221,6 +221,12 @@ pub struct EffectsSpec {
     /// fingerprint.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub friction: bool,
+    /// Regularization by the host element's size (the crack band applied to the cell,
+    /// `docs/fracture.md`): a host's element length (`PROPS(7)`, `CELENT`) stretches the
+    /// softening of the cell's laws. Off (the default) is left out of the fingerprint,
+    /// and a length a host passes is then refused.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub regularization: bool,
 }
 
 impl Default for EffectsSpec {
@@ -230,6 +236,7 @@ impl Default for EffectsSpec {
             contact: true,
             paste_cracking: false,
             friction: false,
+            regularization: false,
         }
     }
 }

@@ -77,6 +77,15 @@ impl SceneSpec {
         validate_interface_laws(&self.materials, self.effects.cohesive && has_inclusions)?;
         validate_paste_cracking(&self.effects, &self.materials)?;
         validate_friction(&self.effects, &self.materials, &self.solver)?;
+        if self.effects.regularization && !self.effects.paste_cracking {
+            // Only the paste's cracks are stretched (`InterfaceLaws::regularized`): a cell
+            // whose ITZ alone cracks never fails, and has nothing to regularize.
+            return Err(Error::scene(
+                "effects.regularization",
+                "needs effects.paste_cracking: the regularization stretches the softening of \
+                 the paste's cracks, and a cell without them never softens to zero",
+            ));
+        }
         if self.effects.paste_cracking && self.solver.step_tolerance.is_some() {
             // The estimate does not yet fall with the step at the paste's brittle drops
             // (docs/fracture.md): a tolerance it cannot hold is refused.

@@ -66,6 +66,7 @@ pub fn cycle_call<'a>(
         npt: 1,
         kstep: 1,
         kinc: k as i32 + 1,
+        celent: None,
     }
 }
 

@@ -47,6 +47,10 @@ pub struct UmatCall<'a> {
     pub npt: i32,
     pub kstep: i32,
     pub kinc: i32,
+    /// `CELENT`, the element's characteristic length, where the host passes one (`None`:
+    /// a NULL pointer). Read only by a scene with `effects.regularization` and
+    /// `PROPS(7)` = 0 (CalculiX 2.20 passes a value it never sets).
+    pub celent: Option<f64>,
 }
 
 impl UmatCall<'_> {

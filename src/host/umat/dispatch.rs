@@ -32,8 +32,12 @@ type MaterialEntry = Result<Arc<Material>, Arc<Error>>;
 /// The table of a host's integration points.
 pub struct Umat {
     search: SearchPath,
-    /// The materials by name and `PROPS`, failures included (see [`Umat::material`]).
+    /// The materials by name, `PROPS` and `CELENT`, failures included (see
+    /// [`Umat::material`]).
     materials: Mutex<HashMap<MaterialKey, MaterialEntry>>,
+    /// The materials by name and `PROPS` before their element's length: the scene of a
+    /// graded mesh's every length is resolved once.
+    scenes: Mutex<HashMap<MaterialKey, Arc<Material>>>,
     statev: StatevMode,
     table: TableMode,
     books: Books,
@@ -44,6 +48,7 @@ impl Umat {
         Umat {
             search,
             materials: Mutex::new(HashMap::new()),
+            scenes: Mutex::new(HashMap::new()),
             statev: StatevMode::new(),
             table: TableMode::new(),
             books: Books::new(),
@@ -151,8 +156,17 @@ impl Umat {
             Some(entry) => return entry.clone().map_err(|e| (e, false)),
             None => false,
         };
-        let entry = Material::resolve(&key.cmname, c.props, &self.search)
-            .map(Arc::new)
+        let mut scenes = self.scenes.lock().unwrap_or_else(PoisonError::into_inner);
+        let base = match scenes.get(&key.without_length()) {
+            Some(base) => Ok(base.clone()),
+            None => Material::resolve(&key.cmname, c.props, &self.search).map(Arc::new),
+        };
+        if let Ok(base) = &base {
+            scenes.insert(key.without_length(), base.clone());
+        }
+        drop(scenes);
+        let entry = base
+            .and_then(|b| b.for_element(c.props, c.celent))
             .map_err(Arc::new);
         materials.insert(key, entry.clone());
         entry.map_err(|e| (e, !reported))

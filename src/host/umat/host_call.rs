@@ -68,6 +68,8 @@ pub struct HostScalars {
     pub kstep: Option<i32>,
     pub kinc: Option<i32>,
     pub dtime: Option<f64>,
+    /// `CELENT` (`None`: NULL, Kratos).
+    pub celent: Option<f64>,
     /// The hidden length of `CMNAME`.
     pub cmname_len: usize,
 }
@@ -297,6 +299,7 @@ impl Read<'_, '_> {
             npt: need(s.npt, "NPT")?,
             kstep: need(s.kstep, "KSTEP")?,
             kinc: need(s.kinc, "KINC")?,
+            celent: s.celent,
         };
         let mut out = UmatOutputs {
             stress: need(stress, "STRESS")?,

@@ -21,11 +21,13 @@ pub(super) const TIME_ROUNDOFF: f64 = 1e-9;
 /// The largest `PNEWDT` asked for an increment whose error exceeds `solver.step_tolerance`.
 const TOLERANCE_CUT: f64 = 0.5;
 
-/// A material as a host names it: `CMNAME` without padding and the bits of `PROPS`.
+/// A material as a host names it: `CMNAME` without padding, the bits of `PROPS`, and the
+/// bits of `CELENT` (the element's length, which a regularized scene reads).
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub(super) struct MaterialKey {
     pub(super) cmname: String,
     props: Vec<u64>,
+    celent: Option<u64>,
 }
 
 impl MaterialKey {
@@ -33,12 +35,22 @@ impl MaterialKey {
         MaterialKey {
             cmname: trim(c.cmname).to_string(),
             props: c.props.iter().map(|v| v.to_bits()).collect(),
+            celent: c.celent.map(f64::to_bits),
+        }
+    }
+
+    /// This key without `CELENT`: the material before its element's length.
+    pub(super) fn without_length(&self) -> Self {
+        MaterialKey {
+            celent: None,
+            ..self.clone()
         }
     }
 
     /// Whether `c` names this material (compared in place: no allocation).
     pub(super) fn matches(&self, c: &UmatCall) -> bool {
         self.cmname == trim(c.cmname)
+            && self.celent == c.celent.map(f64::to_bits)
             && self
                 .props
                 .iter()

@@ -53,23 +53,25 @@ pub struct SystemEvaluation {
 const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 const FNV_PRIME: u64 = 0x0100_0000_01b3;
 
-/// Everything needed to assemble the RVE system; immutable and shared.
+/// Everything needed to assemble the RVE system; immutable and shared. The mesh's parts
+/// sit behind `Arc`s, so that [`Discretization::with_laws`] gives the same cell with other
+/// laws (a regularized one) for the price of the laws.
 #[derive(Clone, Debug)]
 pub struct Discretization {
     pub analysis: Analysis,
-    pub dofs: DofMap,
-    pub bulk: Vec<BulkElement>,
-    pub interfaces: Vec<InterfaceGeometry>,
-    pub interface_dofs: Vec<[u32; 8]>,
+    pub dofs: Arc<DofMap>,
+    pub bulk: Arc<[BulkElement]>,
+    pub interfaces: Arc<[InterfaceGeometry]>,
+    pub interface_dofs: Arc<[[u32; 8]]>,
     /// The interface laws; `None` when the scene has no ITZ (then there are no interface
     /// elements).
     pub law: Option<InterfaceLaws>,
     pub quadrature: InterfaceQuadrature,
-    pub pattern: Pattern,
+    pub pattern: Arc<Pattern>,
     /// Values of `K_const` on the pattern.
-    pub k_const: Vec<f64>,
+    pub k_const: Arc<[f64]>,
     /// `G = dR/d eps`, `n x 3`, column-major.
-    pub g: Vec<f64>,
+    pub g: Arc<[f64]>,
     /// Cell area `V_mu`.
     pub volume: f64,
 }
@@ -156,17 +158,26 @@ impl Discretization {
         }
         Ok(Discretization {
             analysis: spec.analysis,
-            dofs,
-            bulk,
-            interfaces,
-            interface_dofs,
+            dofs: Arc::new(dofs),
+            bulk: bulk.into(),
+            interfaces: interfaces.into(),
+            interface_dofs: interface_dofs.into(),
             law,
             quadrature: spec.quadrature,
-            pattern,
-            k_const,
-            g,
+            pattern: Arc::new(pattern),
+            k_const: k_const.into(),
+            g: g.into(),
             volume: mesh.cell_area(),
         })
+    }
+
+    /// This cell with its interface laws replaced (the mesh, pattern and constant
+    /// operators shared): `None` for a cell without interfaces.
+    pub fn with_laws(&self, laws: InterfaceLaws) -> Discretization {
+        Discretization {
+            law: self.law.as_ref().map(|_| laws),
+            ..self.clone()
+        }
     }
 
     /// Number of unknowns.
@@ -254,7 +265,7 @@ impl Discretization {
         for (e, ((geometry, dofs), out)) in self
             .interfaces
             .iter()
-            .zip(&self.interface_dofs)
+            .zip(self.interface_dofs.iter())
             .zip(closed.chunks_exact_mut(np))
             .enumerate()
         {
@@ -270,7 +281,12 @@ impl Discretization {
     /// the unknowns `x` (points element-major, as in a contact status). Allocates nothing.
     pub fn for_each_jump(&self, x: &[f64], mut f: impl FnMut(usize, [f64; 2])) {
         let np = self.points_per_interface();
-        for (e, (geometry, dofs)) in self.interfaces.iter().zip(&self.interface_dofs).enumerate() {
+        for (e, (geometry, dofs)) in self
+            .interfaces
+            .iter()
+            .zip(self.interface_dofs.iter())
+            .enumerate()
+        {
             let u = Self::gather(x, dofs);
             let jumps = interface4::local_jumps(geometry, self.quadrature, &u);
             for (p, &jump) in jumps[..np].iter().enumerate() {
@@ -323,7 +339,12 @@ impl Discretization {
         };
         let per_element = self.history_per_interface();
         let np = self.points_per_interface();
-        for (e, (geometry, dofs)) in self.interfaces.iter().zip(&self.interface_dofs).enumerate() {
+        for (e, (geometry, dofs)) in self
+            .interfaces
+            .iter()
+            .zip(self.interface_dofs.iter())
+            .enumerate()
+        {
             let u = Self::gather(x, dofs);
             let range = e * per_element..(e + 1) * per_element;
             let resp = interface4::evaluate_with(

@@ -14,7 +14,7 @@ use crate::mesh::InterfaceKind;
 pub struct InterfaceLaws {
     itz: Arc<dyn InterfaceLaw>,
     paste: Option<Arc<dyn InterfaceLaw>>,
-    kinds: Vec<InterfaceKind>,
+    kinds: Arc<[InterfaceKind]>,
 }
 
 impl InterfaceLaws {
@@ -41,7 +41,11 @@ impl InterfaceLaws {
             }
             _ => {}
         }
-        Ok(InterfaceLaws { itz, paste, kinds })
+        Ok(InterfaceLaws {
+            itz,
+            paste,
+            kinds: kinds.into(),
+        })
     }
 
     /// The law of interface element `element`.
@@ -50,6 +54,21 @@ impl InterfaceLaws {
         match (self.kinds[element], &self.paste) {
             (InterfaceKind::Paste, Some(paste)) => paste.as_ref(),
             _ => self.itz.as_ref(),
+        }
+    }
+
+    /// These laws with the paste's softening stretched `scale` times
+    /// ([`InterfaceLaw::regularized`]), the ITZ's law unchanged: the ITZ's law softens from
+    /// its first opening, so most of its softening happens before the cell's peak, as
+    /// diffuse debonding that a crack band must not scale (stretching it too raises the
+    /// cell's strength, `docs/fracture.md`); the paste's cracks open past the peak, where
+    /// the cell localizes.
+    pub fn regularized(&self, scale: f64) -> InterfaceLaws {
+        let stretch = |law: &Arc<dyn InterfaceLaw>| law.regularized(scale).unwrap_or(law.clone());
+        InterfaceLaws {
+            itz: self.itz.clone(),
+            paste: self.paste.as_ref().map(stretch),
+            kinds: self.kinds.clone(),
         }
     }
 

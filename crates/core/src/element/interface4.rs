@@ -408,7 +408,6 @@ mod tests {
             penalty: Penalty::PerLength { lambda_p: 1e7 },
             contact: true,
             contact_shear: ContactShear::Penalty,
-            softening: 1.0,
         }
     }
 

@@ -44,7 +44,7 @@ impl Homogenizer {
         let mut szz_taylor = Vector3::zeros();
         let mut h_szz = vec![0.0; n];
         let plane_strain = disc.analysis == Analysis::PlaneStrain;
-        for e in &disc.bulk {
+        for e in disc.bulk.iter() {
             d_taylor += e.area * e.d;
             if plane_strain {
                 let row = e.poisson * (e.d.row(0) + e.d.row(1));

@@ -172,11 +172,6 @@ pub struct CohesiveLaw {
     pub contact: bool,
     /// What carries the shear of a closed point, when `contact` is on.
     pub contact_shear: ContactShear,
-    /// The stretch `s` of the softening past the peak (1: the paper's law): the envelope
-    /// past `delta_c` is the paper's at `delta_c + (delta - delta_c) / s`, so the energy
-    /// dissipated past the peak is `s` times the paper's and the law before the peak is
-    /// unchanged ([`InterfaceLaw::regularized`]).
-    pub softening: f64,
 }
 
 /// The internal variable of one quadrature point, `q` of eq. 19. Virgin = zero.
@@ -246,47 +241,10 @@ impl CohesiveLaw {
         self.loading_secant(delta) * delta
     }
 
-    /// `t(delta)/delta = (sigma_c/delta_c) exp(1 - delta/delta_c)`, finite at 0; with a
-    /// stretched softening, `t(d)/delta` at the paper's opening `d` ([`Self::unstretched`]).
+    /// `t(delta)/delta = (sigma_c/delta_c) exp(1 - delta/delta_c)`, finite at 0.
     #[inline]
     fn loading_secant(&self, delta: f64) -> f64 {
-        let d = self.unstretched(delta);
-        let k = (self.sigma_c / self.delta_c) * (1.0 - d / self.delta_c).exp();
-        if d == delta {
-            k
-        } else {
-            k * d / delta
-        }
-    }
-
-    /// The opening of the paper's envelope that `delta` stands for: `delta` up to the
-    /// peak, `delta_c + (delta - delta_c) / s` past it (`s` = [`CohesiveLaw::softening`]).
-    #[inline]
-    fn unstretched(&self, delta: f64) -> f64 {
-        if self.softening == 1.0 || delta <= self.delta_c {
-            delta
-        } else {
-            self.delta_c + (delta - self.delta_c) / self.softening
-        }
-    }
-
-    /// The secant stiffness lost at `delta_max`, `D = 1 - k(delta_max) / k(0)`: with the
-    /// paper's envelope `1 - exp(-delta_max/delta_c)`.
-    fn damage(&self, delta_max: f64) -> f64 {
-        if self.unstretched(delta_max) == delta_max {
-            -(-delta_max / self.delta_c).exp_m1()
-        } else {
-            1.0 - self.loading_secant(delta_max) / self.loading_secant(0.0)
-        }
-    }
-
-    /// `(k - t') / delta` on the loading envelope at `opening > delta_c` of a stretched
-    /// softening: `t(delta) = T(d)`, `t' = T'(d) / s` with the paper's `T`.
-    fn stretched_curvature(&self, opening: f64, k: f64) -> f64 {
-        let d = self.unstretched(opening);
-        let paper_secant = (self.sigma_c / self.delta_c) * (1.0 - d / self.delta_c).exp();
-        let slope = paper_secant * (1.0 - d / self.delta_c) / self.softening;
-        (k - slope) / opening
+        (self.sigma_c / self.delta_c) * (1.0 - delta / self.delta_c).exp()
     }
 
     /// `t_max = t(delta_max)` of a history (eq. 23).
@@ -418,22 +376,10 @@ impl CohesiveLaw {
             // (a debug Fortran build) would stop on even where the value is unused.
             let denominator = if opening > 0.0 { opening } else { 1.0 };
             let (us, un) = (bs / denominator, dn / denominator);
-            let (css, csn, cnn) = if self.unstretched(opening) == opening {
-                let inv_dc = 1.0 / self.delta_c;
-                (
-                    k * beta * beta * (1.0 - bs * us * inv_dc),
-                    -k * beta * bs * un * inv_dc,
-                    k * (1.0 - dn * un * inv_dc),
-                )
-            } else {
-                // C = k diag(beta^2, 1) - (k - t')/delta w w^T / delta, w = (beta bs, dn).
-                let g = self.stretched_curvature(opening, k);
-                (
-                    k * beta * beta - g * beta * beta * bs * us,
-                    -g * beta * bs * un,
-                    k - g * dn * un,
-                )
-            };
+            let inv_dc = 1.0 / self.delta_c;
+            let css = k * beta * beta * (1.0 - bs * us * inv_dc);
+            let csn = -k * beta * bs * un * inv_dc;
+            let cnn = k * (1.0 - dn * un * inv_dc);
             CohesivePoint {
                 traction: Vector2::new(k * beta * bs, k * dn),
                 tangent: Matrix2::new(css, csn, csn, cnn),
@@ -627,30 +573,21 @@ impl InterfaceLaw for CohesiveLaw {
             opening_ratio: point.opening / self.delta_c,
             max_opening_ratio: max_ratio,
             max_opening: h.delta_max,
-            damage: self.damage(h.delta_max),
+            damage: -(-max_ratio).exp_m1(),
         })
     }
 
     /// `1 - exp(-delta_max/delta_c)` and `delta_max`, without evaluating the law.
     fn history_measures(&self, history: &[f64], _length: f64) -> Option<(f64, f64)> {
         let delta_max = history[0];
-        Some((self.damage(delta_max), delta_max))
+        Some((-(-delta_max / self.delta_c).exp_m1(), delta_max))
     }
 
     /// `beta^2 (e sigma_c/delta_c) D`, `D = 1 - exp(-delta_max/delta_c)`: the virgin shear
     /// stiffness less the unloading secant's, `beta^2 (K_0 - k(delta_max))`.
     fn damaged_shear_stiffness(&self, history: &[f64], _length: f64) -> Option<f64> {
-        let damage = self.damage(history[0]);
+        let damage = -(-history[0] / self.delta_c).exp_m1();
         Some(self.beta * self.beta * self.initial_stiffness() * damage)
-    }
-
-    /// The paper's law with its softening stretched `scale` times more
-    /// ([`CohesiveLaw::softening`]).
-    fn regularized(&self, scale: f64) -> Option<Arc<dyn InterfaceLaw>> {
-        Some(Arc::new(CohesiveLaw {
-            softening: self.softening * scale,
-            ..*self
-        }))
     }
 
     /// With the paper's contact law read from the gap at every evaluation, closed points
@@ -729,7 +666,6 @@ impl InterfaceLawSpec for ItzSpec {
             },
             contact,
             contact_shear: self.contact_shear,
-            softening: 1.0,
         })
     }
 }
@@ -749,7 +685,6 @@ mod tests {
             penalty: Penalty::PerLength { lambda_p: 1e7 },
             contact,
             contact_shear: ContactShear::Penalty,
-            softening: 1.0,
         }
     }
 
@@ -866,70 +801,6 @@ mod tests {
         // Softening: the normal stiffness is negative past delta_c in pure mode I.
         let p = l.evaluate(&h, [0.0, 1.5 * DC], LEN);
         assert!(p.tangent[(1, 1)] < 0.0);
-    }
-
-    /// A stretched softening (the regularization by a host element's size): the law
-    /// before the peak is the paper's bit for bit, the tangent past it matches central
-    /// differences on loading, unloading and the closed sliding, the traction is
-    /// continuous at `delta_c`, and the energy dissipated past the peak in mode I is
-    /// `s` times the paper's `2 sigma_c delta_c`.
-    #[test]
-    fn stretched_softening() {
-        let paper = law(true);
-        for scale in [0.25, 3.0] {
-            let l = CohesiveLaw {
-                softening: scale,
-                ..paper
-            };
-            for jump in [[0.3 * DC, 0.4 * DC], [0.0, DC], [-0.5 * DC, 0.1 * DC]] {
-                let (a, b) = (
-                    l.evaluate(&loaded_to(0.0), jump, LEN),
-                    paper.evaluate(&loaded_to(0.0), jump, LEN),
-                );
-                assert_eq!((a.traction, a.tangent), (b.traction, b.tangent));
-            }
-            let h = loaded_to(1.2 * DC);
-            check_tangent(&l, &h, [1.1 * DC, 1.5 * DC], 1e-6 * DC, Branch::Loading);
-            check_tangent(&l, &h, [-3.0 * DC, 0.2 * DC], 1e-6 * DC, Branch::Loading);
-            check_tangent(
-                &l,
-                &loaded_to(3.0 * DC),
-                [0.5 * DC, DC],
-                1e-6 * DC,
-                Branch::Unloading,
-            );
-            let (below, above) = (
-                l.envelope(DC * (1.0 - 1e-12)),
-                l.envelope(DC * (1.0 + 1e-12)),
-            );
-            assert!(
-                (below - above).abs() < 1e-9 * paper.sigma_c,
-                "{below} {above}"
-            );
-            // Trapezoid rule on the envelope past the peak, far into its tail.
-            let (n, end) = (400_000, DC * (1.0 + 60.0 * scale));
-            let dx = (end - DC) / n as f64;
-            let energy: f64 = (0..n)
-                .map(|i| {
-                    0.5 * dx
-                        * (l.envelope(DC + i as f64 * dx) + l.envelope(DC + (i + 1) as f64 * dx))
-                })
-                .sum();
-            let expected = scale * 2.0 * paper.sigma_c * paper.delta_c;
-            assert!(
-                (energy / expected - 1.0).abs() < 1e-6,
-                "{energy} {expected}"
-            );
-            let regularized = paper.regularized(scale).expect("the law softens");
-            let r = regularized.respond(
-                &[1.2 * DC],
-                &mut [0.0],
-                [0.0, 2.0 * DC],
-                LEN,
-                TangentKind::Consistent,
-            );
-            assert_eq!(r.traction, l.evaluate(&h, [0.0, 2.0 * DC], LEN).traction);
-        }
     }
 
     #[test]

@@ -101,7 +101,6 @@ mod tests {
             penalty: Penalty::PerLength { lambda_p: 1e7 },
             contact: true,
             contact_shear: shear,
-            softening: 1.0,
         }
     }
 

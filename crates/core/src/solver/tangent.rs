@@ -66,7 +66,7 @@ pub(super) fn condensed_tangent(problem: &Problem, ws: &mut Workspace) -> Result
             depth: 0,
             suggested_step_ratio: 0.5,
         })?;
-    let g = &problem.disc.g;
+    let g: &[f64] = &problem.disc.g;
     ws.factorization.solve_g(problem.linear, g);
     Ok(condensed(g, ws.factorization.kg(), None))
 }
@@ -74,7 +74,7 @@ pub(super) fn condensed_tangent(problem: &Problem, ws: &mut Workspace) -> Result
 /// `C` from the kept factorization `K_f`: exact when `K_f` is the converged `K`, else by
 /// refinement sweeps; `None` when the sweeps cannot reach [`TANGENT_ACCURACY`].
 fn from_last_factorization(problem: &Problem, ws: &mut Workspace) -> Option<[f64; 9]> {
-    let (g, linear) = (&problem.disc.g, problem.linear);
+    let (g, linear): (&[f64], _) = (&problem.disc.g, problem.linear);
     let unchanged = ws.factorization.factorizes(&ws.current.k);
     let symmetric = ws.factorization.is_symmetric() && ws.current.counts.sliding == 0;
     if !(unchanged || symmetric) {
