@@ -289,6 +289,22 @@ uint32_t rve_init_text(const char *toml_text, const char *base_dir, RveHandle *o
 // NUL-terminated) for the duration of the call.
 uint32_t rve_clone_model(RveHandle h, RveHandle *out_handle);
 
+// Creates a new virgin instance of `h`'s scene regularized for a host element of
+// characteristic length `element_length` (the scene's length unit): the softening of the
+// cell's cracks is stretched by `L_cell / element_length`, so that an element crossed by
+// one crack dissipates the cell's fracture energy per unit crack length whatever its
+// size (docs/fracture.md). The scene must have `effects.regularization`. The instances
+// of one scene and length share one model; every length shares the scene's mesh and
+// per-thread workspaces. `*out_handle` is written only on success.
+//
+// Returns `OK`, `NULL_ARGUMENT`, `BAD_HANDLE`, `BAD_SCENE` (a scene without
+// `effects.regularization`, a length that is not a positive number) or `PANIC`.
+//
+// # Safety
+// Each non-NULL pointer must point to valid memory of the documented size for the
+// duration of the call.
+uint32_t rve_clone_for_element(RveHandle h, double element_length, RveHandle *out_handle);
+
 // Trial update with full outputs. Solves the RVE at the macro strain
 // `strain[3] = [eps_xx, eps_yy, gamma_xy]` (Voigt order, ENGINEERING shear
 // `gamma_xy = 2 eps_xy`, dimensionless) starting from the instance's committed state.

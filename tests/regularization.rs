@@ -14,14 +14,20 @@
 //! - Through the UMAT: `PROPS(7)` = `L_cell` answers as no length, `CELENT` as the same
 //!   `PROPS(7)`, two lengths differ after the peak only, and a scene without the effect
 //!   refuses a `PROPS(7)` with a message that names the key.
+//! - Through C: `rve_clone_for_element` answers as the safe API's regularized model, bit
+//!   for bit; one model per scene and length; a bad length or scene gets `BAD_SCENE`.
 
 mod common;
 
 use std::sync::Arc;
 
+use std::ffi::CString;
+
+use rve::ffi::{rve_clone_for_element, rve_commit, rve_init_text, rve_update, RveStatus};
 use rve::host::{SearchPath, Umat, UmatOutputs};
+use rve::model::cache;
 use rve::model::mixed::update_mixed;
-use rve::{Instance, Model, Scene};
+use rve::{Instance, Model, Scene, TangentRequest};
 
 const SCENE: &str = "scenes/concrete_fracture.toml";
 /// The cell's side (mm).
@@ -248,4 +254,69 @@ fn the_umat_takes_the_length_from_props_7_or_celent() {
         .to_string();
     assert!(refused.contains("effects.regularization"), "{refused}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_c_interface_clones_an_instance_for_an_element() {
+    let ok = RveStatus::Ok as u32;
+    let text = CString::new(scene_text(true)).unwrap();
+    let mut base = 0;
+    assert_eq!(
+        unsafe { rve_init_text(text.as_ptr(), std::ptr::null(), &mut base) },
+        ok
+    );
+    let mut fine = 0;
+    assert_eq!(unsafe { rve_clone_for_element(base, 5.0, &mut fine) }, ok);
+    let model = Arc::new(
+        Model::from_scene(&Scene::from_toml_str(&scene_text(true), ".").unwrap()).unwrap(),
+    );
+    let mut reference = Instance::new(Arc::new(model.regularized(5.0).unwrap()));
+    let mut ws = model.workspace();
+    for k in 1..=30 {
+        let strain = [4e-5 * f64::from(k), 0.0, 0.0];
+        let (mut stress, mut tangent) = ([0.0; 3], [0.0; 9]);
+        let status = unsafe {
+            rve_update(
+                fine,
+                strain.as_ptr(),
+                stress.as_mut_ptr(),
+                tangent.as_mut_ptr(),
+                0,
+            )
+        };
+        assert_eq!(status, ok, "increment {k}");
+        assert_eq!(rve_commit(fine), ok);
+        let r = reference
+            .update(strain, &mut ws, TangentRequest::Consistent)
+            .unwrap();
+        reference.commit().unwrap();
+        assert_eq!((stress, tangent), (r.stress, r.tangent), "increment {k}");
+    }
+    let (a, b) = (
+        cache::regularized(&model, 5.0).unwrap(),
+        cache::regularized(&model, 5.0).unwrap(),
+    );
+    assert!(Arc::ptr_eq(&a, &b), "one model per scene and length");
+    let mut out = 0;
+    for bad in [0.0, -1.0, f64::NAN] {
+        assert_eq!(
+            unsafe { rve_clone_for_element(base, bad, &mut out) },
+            RveStatus::BadScene as u32
+        );
+    }
+    let paper = CString::new(common::paper_scene_with(&[])).unwrap();
+    let mut itz_only = 0;
+    assert_eq!(
+        unsafe { rve_init_text(paper.as_ptr(), std::ptr::null(), &mut itz_only) },
+        ok
+    );
+    assert_eq!(
+        unsafe { rve_clone_for_element(itz_only, 5.0, &mut out) },
+        RveStatus::BadScene as u32
+    );
+    assert_eq!(
+        unsafe { rve_clone_for_element(12345, 5.0, &mut out) },
+        RveStatus::BadHandle as u32
+    );
+    assert_eq!(out, 0, "nothing written on failure");
 }

@@ -96,6 +96,21 @@ impl Model {
         })
     }
 
+    /// This model regularized for a host element of characteristic length
+    /// `element_length` (the scene's length unit; the scene needs
+    /// `effects.regularization`): the cell's cracks soften over `L_cell / element_length`
+    /// times their length, so that an element crossed by one crack dissipates the cell's
+    /// fracture energy per unit crack length whatever its size. One model per scene and
+    /// length; every length shares the scene's mesh.
+    fn for_element(&self, py: Python<'_>, element_length: f64) -> PyResult<Model> {
+        let model = rve::model::cache::regularized(&self.model, element_length)
+            .map_err(|e| whole_error(py, e))?;
+        Ok(Model {
+            model,
+            path: self.path.clone(),
+        })
+    }
+
     /// `n` virgin points (instances) of this model; `threads` as `Points.threads`.
     #[pyo3(signature = (n, threads=1))]
     fn points(&self, n: usize, threads: usize) -> Points {

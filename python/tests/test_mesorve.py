@@ -190,3 +190,31 @@ def test_uniaxial_stress_recipe_follows_rve_run_through_failure(tmp_path):
     assert expected[-1, 0] < 0.5 * peak  # through the peak into the softening
     assert np.abs(got[:, 1:]).max() <= 1e-6 * peak
     assert np.abs(got[:, 0] - expected[:, 0]).max() <= 1e-4 * peak
+
+
+def test_for_element_regularizes_the_failing_cell():
+    """`Model.for_element(h)`: at the cell's own size (10 mm) the answers of the scene's
+    model; an element half as large keeps more stress after the peak, a scene without
+    `effects.regularization` refuses a length."""
+    text = pathlib.Path(FRACTURE).read_text().replace(
+        "paste_cracking = true", "paste_cracking = true\nregularization = true", 1)
+    model = mesorve.Model(text=text)
+
+    def tension(m):
+        points = m.points(1)
+        eps = np.zeros((1, 3))
+        out = []
+        for e in np.linspace(4e-5, 1.2e-3, 30):
+            sig, _, eps = update_uniaxial(points, [e], eps, dtime=4e-5)
+            points.commit()
+            out.append(sig[0, 0])
+        return np.array(out)
+
+    own, half, scene = tension(model.for_element(10.0)), tension(model.for_element(5.0)), tension(model)
+    assert np.array_equal(own, scene)
+    peak = scene.max()
+    top = int(np.argmax(scene))
+    assert np.abs(half[:top + 1] - scene[:top + 1]).max() <= 1e-6 * peak
+    assert half[-1] > scene[-1] + 0.01 * peak
+    with pytest.raises(Exception, match="effects.regularization"):
+        mesorve.Model(FRACTURE).for_element(5.0)

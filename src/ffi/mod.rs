@@ -25,10 +25,10 @@ pub use batch::{rve_update_batch, rve_update_batch_timed};
 pub use guard::rve_last_error;
 pub use init::rve_init;
 pub use instance::{
-    rve_clone_model, rve_commit, rve_fast_updates, rve_free, rve_init_file, rve_init_text,
-    rve_model_builds, rve_path_len, rve_path_point, rve_reset, rve_revert, rve_state_load,
-    rve_state_save, rve_state_size, rve_update, rve_update_ex, rve_update_timed, rve_write_vtk,
-    RveHandle, RveInfo, RveReliability, RveTangentRequest,
+    rve_clone_for_element, rve_clone_model, rve_commit, rve_fast_updates, rve_free, rve_init_file,
+    rve_init_text, rve_model_builds, rve_path_len, rve_path_point, rve_reset, rve_revert,
+    rve_state_load, rve_state_save, rve_state_size, rve_update, rve_update_ex, rve_update_timed,
+    rve_write_vtk, RveHandle, RveInfo, RveReliability, RveTangentRequest,
 };
 pub use mesorve_core::state::STATE_FORMAT_VERSION;
 pub use registry::live_instances;

@@ -282,7 +282,7 @@ impl Material {
             },
             h => (h, "PROPS(7)"),
         };
-        let model = self.model.regularized(length)?;
+        let model = cache::regularized(&self.model, length)?;
         if from == "CELENT" {
             note_once(Note::Celent, || {
                 format!(
@@ -293,7 +293,7 @@ impl Material {
             });
         }
         Ok(Arc::new(Material {
-            model: Arc::new(model),
+            model,
             tangent: self.tangent,
             elastic: self.elastic,
             source: format!("{}, element length {length} ({from})", self.source),

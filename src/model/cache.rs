@@ -23,6 +23,9 @@ enum Key {
 
 static CACHE: LazyLock<Mutex<HashMap<Key, Weak<Model>>>> =
     LazyLock::new(|| Mutex::new(HashMap::new()));
+/// Regularized models by the scene model's id and the element length's bits.
+static REGULARIZED: LazyLock<Mutex<HashMap<(u64, u64), Weak<Model>>>> =
+    LazyLock::new(|| Mutex::new(HashMap::new()));
 static BUILDS: AtomicU64 = AtomicU64::new(0);
 
 /// Models built through this cache by this process (each scene once while one of its
@@ -41,6 +44,26 @@ fn cached(key: Key, build: impl FnOnce() -> Result<Scene>) -> Result<Arc<Model>>
     let model = Arc::new(Model::from_scene(&scene)?);
     BUILDS.fetch_add(1, Ordering::Relaxed);
     cache.retain(|_, m| m.strong_count() > 0);
+    cache.insert(key, Arc::downgrade(&model));
+    Ok(model)
+}
+
+/// `model`'s scene model regularized for a host element of length `element_length`
+/// ([`Model::regularized`]), one per scene model and length while one of its instances
+/// lives: the points of one element, or of a graded mesh's elements of one size, share
+/// it.
+pub fn regularized(model: &Arc<Model>, element_length: f64) -> Result<Arc<Model>> {
+    let base = model.unregularized();
+    let key = (base.id, element_length.to_bits());
+    let mut cache = REGULARIZED.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(model) = cache.get(&key).and_then(Weak::upgrade) {
+        return Ok(model);
+    }
+    let model = Arc::new(base.regularized(element_length)?);
+    if cache.len().is_power_of_two() {
+        // Amortized: a graded mesh adds its lengths one by one.
+        cache.retain(|_, m| m.strong_count() > 0);
+    }
     cache.insert(key, Arc::downgrade(&model));
     Ok(model)
 }
