@@ -11,8 +11,8 @@
 //!   stretched: `G_paste + (h / L_cell) G_itz`, checked by its prediction.
 //! - The regularized model shares the scene's workspaces; a state of one element length
 //!   is refused at another; a scene without `effects.regularization` refuses a length.
-//! - Through the UMAT: `PROPS(7)` = `L_cell` answers as no length, `CELENT` as the same
-//!   `PROPS(7)`, two lengths differ after the peak only, and a scene without the effect
+//! - Through the UMAT: `PROPS(7)` = `L_cell` answers as no length, and so does a `CELENT`
+//!   of 0 (CalculiX's unset one); a `CELENT` as the same `PROPS(7)`, two lengths differ after the peak only, and a scene without the effect
 //!   refuses a `PROPS(7)` with a message that names the key.
 //! - Through C: `rve_clone_for_element` answers as the safe API's regularized model, bit
 //!   for bit; one model per scene and length; a bad length or scene gets `BAD_SCENE`.
@@ -225,6 +225,9 @@ fn the_umat_takes_the_length_from_props_7_or_celent() {
     let by_celent = umat_path(&umat, 4, &[], Some(5.0)).unwrap();
     let coarse = umat_path(&umat, 5, &with(20.0), None).unwrap();
     assert_eq!(own, none, "PROPS(7) = L_cell");
+    // CalculiX 2.20 passes a CELENT it never sets: 0 is no length.
+    let unset = umat_path(&umat, 7, &[], Some(0.0)).unwrap();
+    assert_eq!(unset, none, "CELENT = 0");
     assert_eq!(by_celent, fine, "CELENT as PROPS(7)");
     let peak = none.iter().copied().fold(f64::MIN, f64::max);
     let at_peak = none.iter().position(|&s| s == peak).unwrap();

@@ -264,7 +264,9 @@ impl Material {
     pub fn for_element(self: &Arc<Self>, props: &[f64], celent: Option<f64>) -> Result<Arc<Self>> {
         let regularizes = self.model.scene().spec.effects.regularization;
         let (length, from) = match props.get(PROPS_LENGTH - 1).copied().unwrap_or(0.0) {
-            0.0 => match celent.filter(|_| regularizes) {
+            // A CELENT that is not a positive number is one the host did not set (CalculiX
+            // 2.20 passes its unset variable).
+            0.0 => match celent.filter(|h| regularizes && h.is_finite() && *h > 0.0) {
                 Some(h) => (h, "CELENT"),
                 None => {
                     if regularizes {

@@ -23,8 +23,10 @@ enum Key {
 
 static CACHE: LazyLock<Mutex<HashMap<Key, Weak<Model>>>> =
     LazyLock::new(|| Mutex::new(HashMap::new()));
-/// Regularized models by the scene model's id and the element length's bits.
-static REGULARIZED: LazyLock<Mutex<HashMap<(u64, u64), Weak<Model>>>> =
+/// A regularized model's key: its scene model's id and the element length's bits.
+type RegularizedKey = (u64, u64);
+
+static REGULARIZED: LazyLock<Mutex<HashMap<RegularizedKey, Weak<Model>>>> =
     LazyLock::new(|| Mutex::new(HashMap::new()));
 static BUILDS: AtomicU64 = AtomicU64::new(0);
 

@@ -50,6 +50,10 @@ struct Info {
     /// The fingerprint states of this scene carry (10 hex digits; the UMAT refuses a
     /// state of another): the scene as parsed, a Gmsh file's content, the integration.
     state_fingerprint: String,
+    /// `effects.regularization`: whether the host's element length (`PROPS(7)`, else
+    /// `CELENT`) stretches the cell's softening (the state fingerprint then also holds
+    /// the length).
+    regularization: bool,
 }
 
 pub fn run(args: &InfoArgs) -> Result<()> {
@@ -74,6 +78,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         checkpoint_bytes,
         umat_nstatv: model.statev_len(),
         state_fingerprint: format!("{:010x}", model.fingerprint()),
+        regularization: scene.spec.effects.regularization,
     };
     if args.json {
         println!(
@@ -97,7 +102,7 @@ fn loaded_instance_bytes(model: &Arc<Model>) -> Result<(usize, usize)> {
 }
 
 fn print_text(info: &Info) {
-    let rows: [(&str, String); 13] = [
+    let rows: [(&str, String); 14] = [
         ("scene", info.scene.clone()),
         (
             "analysis",
@@ -116,6 +121,14 @@ fn print_text(info: &Info) {
         ("checkpoint bytes", info.checkpoint_bytes.to_string()),
         ("umat_nstatv", info.umat_nstatv.to_string()),
         ("state fingerprint", info.state_fingerprint.clone()),
+        (
+            "regularization",
+            if info.regularization {
+                "by the element length: PROPS(7), else CELENT".to_string()
+            } else {
+                "off".to_string()
+            },
+        ),
     ];
     for (label, value) in rows {
         println!("{label:<24} {value}");
