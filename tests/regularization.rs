@@ -8,7 +8,8 @@
 //!   dissipates per unit crack length, `h * int sigma d eps`, changes by less than 10 %
 //!   from `h` to `2 h` for `h` from `L_cell / 2` to `2 L_cell` (without the
 //!   regularization it would double); what remains is the ITZ's share, which is not
-//!   stretched: `G_paste + (h / L_cell) G_itz`, checked by its prediction.
+//!   stretched: `G_paste + (h / L_cell) G_itz`, fitted at 5 and 10 mm and checked by its
+//!   prediction at 20 and 2.5 mm. At 100 mm the cell still fails.
 //! - The regularized model shares the scene's workspaces; a state of one element length
 //!   is refused at another; a scene without `effects.regularization` refuses a length.
 //! - Through the UMAT: `PROPS(7)` = `L_cell` answers as no length, and so does a `CELENT`
@@ -94,7 +95,13 @@ fn the_energy_per_crack_length_does_not_follow_the_element_size() {
     let base = scene_model(true);
     // (element length, last strain, increments): the strain to full separation grows
     // as the element shrinks (about 2e-2 at the cell's own size).
-    let runs = [(5.0, 4e-2, 4000), (10.0, 2e-2, 2000), (20.0, 1e-2, 1000)];
+    let runs = [
+        (5.0, 4e-2, 4000),
+        (10.0, 2e-2, 2000),
+        (20.0, 1e-2, 1000),
+        (2.5, 8e-2, 8000),
+        (100.0, 4e-3, 400),
+    ];
     let mut energies = Vec::new();
     let mut peaks = Vec::new();
     for (h, last, increments) in runs {
@@ -110,7 +117,7 @@ fn the_energy_per_crack_length_does_not_follow_the_element_size() {
         energies.push(energy);
         peaks.push(peak);
     }
-    for pair in energies.windows(2) {
+    for pair in energies[..3].windows(2) {
         assert!(
             (pair[1] / pair[0] - 1.0).abs() < 0.10,
             "h and 2h dissipate {pair:?} N/m"
@@ -120,17 +127,23 @@ fn the_energy_per_crack_length_does_not_follow_the_element_size() {
     // (h / L_cell) G_itz. Fitted on h = 5 and 10 mm, it predicts h = 20 mm.
     let g_itz = 2.0 * (energies[1] - energies[0]);
     let g_paste = energies[1] - g_itz;
-    let predicted = g_paste + 2.0 * g_itz;
+    let predict = |h: f64| g_paste + h / CELL * g_itz;
     println!(
-        "G_paste {g_paste:.1} N/m (stretched), G_itz {g_itz:.1} N/m (not): h = 20 mm \
-         predicted {predicted:.1}, computed {:.1} N/m",
-        energies[2]
+        "G_paste {g_paste:.1} N/m (stretched), G_itz {g_itz:.1} N/m (not): predicted at \
+         h = 20, 2.5, 100 mm {:.1}, {:.1}, {:.1} N/m",
+        predict(20.0),
+        predict(2.5),
+        predict(100.0)
     );
     assert!(
         g_itz > 0.0 && g_itz < 0.15 * g_paste,
         "G_itz {g_itz}, G_paste {g_paste}"
     );
-    assert!((energies[2] / predicted - 1.0).abs() < 0.02);
+    assert!((energies[2] / predict(20.0) - 1.0).abs() < 0.02);
+    assert!((energies[3] / predict(2.5) - 1.0).abs() < 0.02);
+    // Ten times the cell: it still fails (above), and the ITZ's unstretched share is
+    // most of what it dissipates beyond the paste's.
+    assert!(energies[4] > predict(20.0));
     // Without the regularization the element would dissipate h W with the cell's own W:
     // from h = 5 to 20 mm, four times as much.
     let unregularized: Vec<f64> = runs.iter().map(|r| r.0 * energies[1] / CELL).collect();
