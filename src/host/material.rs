@@ -274,7 +274,8 @@ impl Material {
                             format!(
                                 "mesorve: {}: effects.regularization is on and the host gives \
                                  no element length (PROPS(7) = 0, no CELENT): the cell is not \
-                                 regularized, and a member's dissipation follows its mesh",
+                                 regularized, and a member's dissipation follows its mesh \
+                                 (printed once)",
                                 self.source
                             )
                         });
@@ -289,7 +290,8 @@ impl Material {
             note_once(Note::Celent, || {
                 format!(
                     "mesorve: {}: regularized by the host's CELENT ({length} at the first \
-                     element); set PROPS(7) where the host does not set CELENT (CalculiX)",
+                     element); set PROPS(7) where the host does not set CELENT (CalculiX) \
+                     (printed once)",
                     self.source
                 )
             });
