@@ -136,7 +136,7 @@ module rve
 
   ! ---- bind(C) interfaces: one per function of include/rve.h, in the header's order ----
   public :: rve_update_batch, rve_update_batch_timed, rve_last_error, rve_init, rve_init_file, rve_init_text, &
-      rve_clone_model, rve_update_ex, rve_update_timed, rve_update, rve_commit, rve_revert, rve_reset, &
+      rve_clone_model, rve_clone_for_element, rve_update_ex, rve_update_timed, rve_update, rve_commit, rve_revert, rve_reset, &
       rve_free, rve_fast_updates, rve_state_size, rve_state_save, rve_state_load, rve_write_vtk, rve_path_len, &
       rve_path_point, rve_model_builds, rve_status_message, rve_umat, rve_version, &
       rve_version_number, rve_abi_version
@@ -226,6 +226,17 @@ module rve
       integer(c_int64_t), intent(inout) :: out_handle
       integer(c_int32_t) :: status
     end function rve_clone_model
+
+    ! A virgin instance of h's scene regularized for a host element of length
+    ! element_length (the scene needs effects.regularization; docs/fracture.md).
+    function rve_clone_for_element(h, element_length, out_handle) &
+        bind(c, name="rve_clone_for_element") result(status)
+      import :: c_int64_t, c_double, c_int32_t
+      integer(c_int64_t), value, intent(in) :: h
+      real(c_double), value, intent(in) :: element_length
+      integer(c_int64_t), intent(inout) :: out_handle
+      integer(c_int32_t) :: status
+    end function rve_clone_for_element
 
     ! Trial update. tangent(3,3) receives the TRANSPOSE of d stress / d strain (see above);
     ! pass any 3x3 array with RVE_TANGENT_REQUEST_NONE (not written). stress and tangent
