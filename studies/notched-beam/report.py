@@ -47,7 +47,7 @@ def main(out, runs):
     rows = [(label, job, figures(curve(os.path.join(out, job)))) for label, job in runs]
     ref = rows[0][2]
     print("| run | increments | peak load (N) | load < 10 % of it at deflection (mm) | load at "
-          "0.4 mm | dissipated (N/m) | over the first run's | load back at 0 (N) | largest "
+          "0.2 mm | dissipated (N/m) | over the first run's | load back at 0 (N) | largest "
           "upward load (N) |")
     print("|---|---|---|---|---|---|---|---|---|")
     for label, _, f in rows:
