@@ -263,11 +263,11 @@ impl Material {
     /// operators and workspaces: a graded mesh costs a small model per distinct length.
     pub fn for_element(self: &Arc<Self>, props: &[f64], celent: Option<f64>) -> Result<Arc<Self>> {
         let regularizes = self.model.scene().spec.effects.regularization;
-        let (length, from) = match props.get(PROPS_LENGTH - 1).copied().unwrap_or(0.0) {
+        let (length, from_celent) = match props.get(PROPS_LENGTH - 1).copied().unwrap_or(0.0) {
             // A CELENT that is not a positive number is one the host did not set (CalculiX
             // 2.20 passes its unset variable).
             0.0 => match celent.filter(|h| regularizes && h.is_finite() && *h > 0.0) {
-                Some(h) => (h, "CELENT"),
+                Some(h) => (h, true),
                 None => {
                     if regularizes {
                         note_once(Note::NoElementLength, || {
@@ -283,10 +283,10 @@ impl Material {
                     return Ok(self.clone());
                 }
             },
-            h => (h, "PROPS(7)"),
+            h => (h, false),
         };
         let model = cache::regularized(&self.model, length)?;
-        if from == "CELENT" {
+        if from_celent {
             note_once(Note::Celent, || {
                 format!(
                     "mesorve: {}: regularized by the host's CELENT ({length} at the first \
@@ -300,7 +300,11 @@ impl Material {
             model,
             tangent: self.tangent,
             elastic: self.elastic,
-            source: format!("{}, element length {length} ({from})", self.source),
+            source: format!(
+                "{}, element length {length} ({})",
+                self.source,
+                if from_celent { "CELENT" } else { "PROPS(7)" }
+            ),
         }))
     }
 }

@@ -172,7 +172,7 @@ impl Discretization {
     }
 
     /// This cell with its interface laws replaced (the mesh, pattern and constant
-    /// operators shared): `None` for a cell without interfaces.
+    /// operators shared); a cell without interfaces stays without laws.
     pub fn with_laws(&self, laws: InterfaceLaws) -> Discretization {
         Discretization {
             law: self.law.as_ref().map(|_| laws),
